@@ -1,0 +1,16 @@
+# Compiles every public header on its own: one generated translation unit per header that
+# includes just that header, so a header that forgets an include of its own fails here.
+function(rangenav_add_header_check)
+  file(GLOB_RECURSE headers RELATIVE "${PROJECT_SOURCE_DIR}/include"
+       CONFIGURE_DEPENDS "${PROJECT_SOURCE_DIR}/include/rangenav/*.hpp")
+  set(sources)
+  foreach(header IN LISTS headers)
+    string(MAKE_C_IDENTIFIER "${header}" name)
+    set(tu "${PROJECT_BINARY_DIR}/header_check/${name}.cpp")
+    file(CONFIGURE OUTPUT "${tu}" CONTENT "#include <${header}>\n")
+    list(APPEND sources "${tu}")
+  endforeach()
+  add_library(rangenav_header_check OBJECT ${sources})
+  target_link_libraries(rangenav_header_check PRIVATE rangenav::rangenav)
+  rangenav_set_warnings(rangenav_header_check)
+endfunction()

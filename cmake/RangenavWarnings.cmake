@@ -1,0 +1,17 @@
+# Warning flags for rangenav's own tests, examples and benchmarks (never forced on users).
+# -Werror is on when the cache option RANGENAV_WERROR is ON or the environment variable
+# RANGENAV_WERROR is set to ON/1 (as CI does), so the README's presets stay usable with newer
+# compilers that add warnings.
+if(DEFINED ENV{RANGENAV_WERROR})
+  set(_rangenav_werror_default $ENV{RANGENAV_WERROR})
+else()
+  set(_rangenav_werror_default OFF)
+endif()
+option(RANGENAV_WERROR "Treat warnings as errors" ${_rangenav_werror_default})
+
+function(rangenav_set_warnings target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wconversion)
+  if(RANGENAV_WERROR)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+endfunction()
