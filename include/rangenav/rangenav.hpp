@@ -12,4 +12,6 @@
 #include "rangenav/scan/depth_image.hpp"
 #include "rangenav/scan/laser_scan.hpp"
 #include "rangenav/scan/pitching.hpp"
+#include "rangenav/sim/world.hpp"
+#include "rangenav/sim/world_file.hpp"
 // clang-format on
