@@ -14,4 +14,5 @@
 #include "rangenav/scan/pitching.hpp"
 #include "rangenav/sim/world.hpp"
 #include "rangenav/sim/world_file.hpp"
+#include "rangenav/sim/worlds.hpp"
 // clang-format on
