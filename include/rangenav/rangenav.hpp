@@ -12,6 +12,7 @@
 #include "rangenav/scan/depth_image.hpp"
 #include "rangenav/scan/laser_scan.hpp"
 #include "rangenav/scan/pitching.hpp"
+#include "rangenav/sim/robot.hpp"
 #include "rangenav/sim/sensors.hpp"
 #include "rangenav/sim/world.hpp"
 #include "rangenav/sim/world_file.hpp"

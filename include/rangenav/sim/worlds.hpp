@@ -28,13 +28,6 @@
 
 namespace rangenav::sim {
 
-/// A primitive of a World: its kind (wall, box, cylinder, door) and index.
-struct PrimitiveRef {
-  SurfaceKind kind{SurfaceKind::none};
-  std::uint32_t index{0};
-  friend bool operator==(const PrimitiveRef&, const PrimitiveRef&) = default;
-};
-
 /// A named object of a built-in world and where it truly is.
 struct SceneObject {
   std::string name;      ///< unique, e.g. "couch_table"
