@@ -141,7 +141,7 @@ inline PcdHeader parse_pcd_header(std::string_view text, const std::filesystem::
   };
 
   while (cursor.next(line)) {
-    split_tokens(line, tok);
+    split_whitespace(line, tok);
     if (tok.empty() || tok[0].front() == '#') continue;
     const std::string_view key = tok[0];
     if (key == "VERSION") {
@@ -382,7 +382,7 @@ void decode_pcd_ascii(std::string_view text, const PcdHeader& h, const PcdLayout
     if (!parse_as(tok[s.token], s.type, out)) bad(s, what);
   };
   while (cursor.next(line)) {
-    split_tokens(line, tok);
+    split_whitespace(line, tok);
     if (tok.empty()) continue;
     if (i == h.points)
       throw_io(pcd, path, cursor.line(),

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "rangenav/core/error.hpp"
+#include "rangenav/io/line_reader.hpp"
 
 namespace rangenav::io {
 
@@ -186,21 +187,6 @@ inline std::uint8_t load_channel(const unsigned char* p, ValueType t) {
 }
 
 // ---- text -----------------------------------------------------------------------------------
-
-/// Splits a line at blanks (space, tab, CR) into tokens; out is reused.
-inline void split_tokens(std::string_view line, std::vector<std::string_view>& out) {
-  out.clear();
-  std::size_t i = 0;
-  const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
-  while (i < line.size()) {
-    while (i < line.size() && blank(line[i]))
-      ++i;
-    const std::size_t start = i;
-    while (i < line.size() && !blank(line[i]))
-      ++i;
-    if (i > start) out.push_back(line.substr(start, i - start));
-  }
-}
 
 /// Walks a buffer line by line, counting 1-based line numbers.
 class LineCursor {
