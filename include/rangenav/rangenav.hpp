@@ -12,6 +12,7 @@
 #include "rangenav/io/carmen.hpp"
 #include "rangenav/io/line_reader.hpp"
 #include "rangenav/io/pcd.hpp"
+#include "rangenav/io/ply.hpp"
 #include "rangenav/io/svg.hpp"
 #include "rangenav/scan/depth_image.hpp"
 #include "rangenav/scan/laser_scan.hpp"
