@@ -14,9 +14,13 @@
 #include "rangenav/io/pcd.hpp"
 #include "rangenav/io/ply.hpp"
 #include "rangenav/io/svg.hpp"
+#include "rangenav/io/trajectory.hpp"
 #include "rangenav/scan/depth_image.hpp"
 #include "rangenav/scan/laser_scan.hpp"
 #include "rangenav/scan/pitching.hpp"
+#include "rangenav/sim/robot.hpp"
+#include "rangenav/sim/sensors.hpp"
 #include "rangenav/sim/world.hpp"
 #include "rangenav/sim/world_file.hpp"
+#include "rangenav/sim/worlds.hpp"
 // clang-format on
