@@ -11,6 +11,8 @@
 #include "rangenav/core/types.hpp"
 #include "rangenav/io/carmen.hpp"
 #include "rangenav/io/line_reader.hpp"
+#include "rangenav/io/slam_relations.hpp"
+#include "rangenav/registration/hayai.hpp"
 #include "rangenav/scan/depth_image.hpp"
 #include "rangenav/scan/laser_scan.hpp"
 #include "rangenav/scan/pitching.hpp"
