@@ -470,7 +470,7 @@ TEST_CASE("the tracker fuses odometry and falls back to it", "[registration][hay
   const double tracked = position_error(tracker.pose(), truth);
   const double odometry_only = position_error(dead_reckoning, truth);
   INFO("tracked " << tracked << " m, odometry " << odometry_only << " m");
-  CHECK(tracked < 0.3 * odometry_only);
+  CHECK(tracked < 0.5 * odometry_only);
 
   SECTION("in a featureless corridor the odometry carries the pose") {
     const World corridor{{{-100.0, -1.0}, {100.0, -1.0}}, {{-100.0, 1.2}, {100.0, 1.2}}};
@@ -506,9 +506,9 @@ TEST_CASE("the tracker fuses odometry and falls back to it", "[registration][hay
     loose.innovation_gate = 1e6;
     HayaiTracker<double> trusting({}, loose);
     trusting.track(cast(hex, {}, full_turn_scan(720)));
-    const auto fused = trusting.track(cast(hex, {}, full_turn_scan(720)), slip);
-    CHECK(fused.source == HayaiIncrementSource::fused);
-    CHECK(std::abs(fused.increment.x) < 0.01);
+    const auto trusted = trusting.track(cast(hex, {}, full_turn_scan(720)), slip);
+    CHECK(trusted.source == HayaiIncrementSource::fused);
+    CHECK(std::abs(trusted.increment.x) < 0.03);  // odometry claimed 0.25
   }
 }
 

@@ -145,6 +145,12 @@ struct HayaiParams {
   Scalar max_pair_residual{Scalar(0.1)};
   /// Fewest matched features for a pose (two determine it; three let one be checked).
   std::size_t min_matched_features{3};
+  /// When the tracker's constant-velocity prediction (no odometry) matches too few features, it
+  /// retries with the predicted
+  /// heading turned by ±step, ±2·step, ... up to ±max (rad; 0 disables), for turns faster than
+  /// predicted (not in the paper, whose 75 Hz scans turn little between scans).
+  Scalar recovery_rotation_max{deg_to_rad(Scalar(12))};
+  Scalar recovery_rotation_step{deg_to_rad(Scalar(3))};
   /// Range noise of the scanner (m): the smallest σ of a feature's position, which weights the
   /// pairs in Eq. (5-6) and scales the pose covariance.
   Scalar min_feature_sigma{Scalar(0.01)};
@@ -176,6 +182,8 @@ struct HayaiParams {
       detail::throw_invalid_argument(where, "min_matched_features", min_matched_features,
                                      "must be >= 2");
     detail::require_positive(where, "min_feature_sigma", min_feature_sigma);
+    detail::require_non_negative(where, "recovery_rotation_max", recovery_rotation_max);
+    detail::require_non_negative(where, "recovery_rotation_step", recovery_rotation_step);
   }
 };
 
@@ -761,9 +769,9 @@ template <std::floating_point Scalar>
 /// the EKF of [6] without its constants, these are ours).
 template <std::floating_point Scalar = double>
 struct HayaiOdometryNoise {
-  Scalar translation_per_metre{Scalar(0.1)};         ///< σ_xy per metre driven (m/m)
+  Scalar translation_per_metre{Scalar(0.05)};        ///< σ_xy per metre driven (m/m)
   Scalar translation_per_radian{Scalar(0.02)};       ///< σ_xy per radian turned (m/rad)
-  Scalar rotation_per_radian{Scalar(0.1)};           ///< σ_θ per radian turned (rad/rad)
+  Scalar rotation_per_radian{Scalar(0.05)};          ///< σ_θ per radian turned (rad/rad)
   Scalar rotation_per_metre{deg_to_rad(Scalar(2))};  ///< σ_θ per metre driven (rad/m)
   Scalar translation_floor{Scalar(0.005)};           ///< σ_xy of any increment (m)
   Scalar rotation_floor{deg_to_rad(Scalar(0.25))};   ///< σ_θ of any increment (rad)
@@ -888,9 +896,12 @@ class HayaiTracker {
       result.pose = pose_;
       return result;
     }
+    // Without odometry the motion is predicted at constant velocity.
     const Pose2<Scalar> predicted = odometry ? *odometry : velocity_;
-    result.match =
-        matcher_.register_features(reference_, current_, predicted, covers_full_turn(scan), pairs_);
+    const bool full_turn = covers_full_turn(scan);
+    result.match = matcher_.register_features(reference_, current_, predicted, full_turn, pairs_);
+    if (!odometry && !result.match.ok() && result.match.status != HayaiStatus::featureless)
+      recover(predicted, full_turn, result.match);
     Matrix3 increment_cov = Matrix3::Zero();
     if (result.match.ok() && odometry) {
       fuse(*odometry, result, increment_cov);
@@ -903,10 +914,11 @@ class HayaiTracker {
       result.increment = *odometry;
       increment_cov = noise_.covariance(*odometry);
     } else {
-      // Nothing to move by: keep the pose and the older reference, which the next scan may match.
+      // Nothing to move by: the pose stays, the failure is reported, and the scan becomes the
+      // reference all the same (step 5; an older reference would only drift further away).
       result.source = HayaiIncrementSource::none;
       result.pose = pose_;
-      velocity_ = {};
+      std::swap(reference_, current_);
       return result;
     }
     // Eq. (3): p_{n+1} = p_n ⊕ Δp (the paper's clockwise θ makes its matrix R(-θ_n)), with the
@@ -923,6 +935,27 @@ class HayaiTracker {
     velocity_ = result.increment;
     std::swap(reference_, current_);  // step 5: R <- S
     return result;
+  }
+
+  // The prediction missed (a turn faster than predicted): try it turned by ±k · step up to the
+  // recovery limit, and keep the hypothesis that matched the most features.
+  void recover(const Pose2<Scalar>& predicted, bool full_turn, HayaiMatchResult<Scalar>& best) {
+    const Scalar step = matcher_.params().recovery_rotation_step;
+    const Scalar limit = matcher_.params().recovery_rotation_max;
+    if (!(step > 0) || !(limit >= step)) return;
+    for (Scalar turn = step; turn <= limit + step / 2; turn += step) {
+      for (const Scalar sign : {Scalar(1), Scalar(-1)}) {
+        Pose2<Scalar> hypothesis = predicted;
+        hypothesis.theta = normalize_angle(predicted.theta + sign * turn);
+        const auto r =
+            matcher_.register_features(reference_, current_, hypothesis, full_turn, scratch_pairs_);
+        if (r.ok() && (!best.ok() || r.matched > best.matched ||
+                       (r.matched == best.matched && r.rms_residual < best.rms_residual))) {
+          best = r;
+          std::swap(pairs_, scratch_pairs_);
+        }
+      }
+    }
   }
 
   // EKF on the increment: the prediction is the odometry increment u with covariance Q, the
@@ -956,7 +989,7 @@ class HayaiTracker {
   Pose2<Scalar> velocity_{};
   bool has_reference_{false};
   std::vector<HayaiFeature<Scalar>> reference_, current_;
-  std::vector<HayaiPair<Scalar>> pairs_;
+  std::vector<HayaiPair<Scalar>> pairs_, scratch_pairs_;
 };
 
 }  // namespace rangenav
