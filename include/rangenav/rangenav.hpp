@@ -9,6 +9,7 @@
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/point_cloud.hpp"
 #include "rangenav/core/types.hpp"
+#include "rangenav/egocentric/virtual_map.hpp"
 #include "rangenav/scan/depth_image.hpp"
 #include "rangenav/scan/laser_scan.hpp"
 #include "rangenav/scan/pitching.hpp"
