@@ -10,7 +10,11 @@
 #include "rangenav/core/point_cloud.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/egocentric/virtual_map.hpp"
+#include "rangenav/io/carmen.hpp"
+#include "rangenav/io/line_reader.hpp"
 #include "rangenav/scan/depth_image.hpp"
 #include "rangenav/scan/laser_scan.hpp"
 #include "rangenav/scan/pitching.hpp"
+#include "rangenav/sim/world.hpp"
+#include "rangenav/sim/world_file.hpp"
 // clang-format on
