@@ -11,6 +11,7 @@
 #include "rangenav/core/types.hpp"
 #include "rangenav/egocentric/floor.hpp"
 #include "rangenav/egocentric/gaze.hpp"
+#include "rangenav/egocentric/pitching_stream.hpp"
 #include "rangenav/egocentric/tof_obstacles.hpp"
 #include "rangenav/egocentric/virtual_map.hpp"
 #include "rangenav/io/carmen.hpp"

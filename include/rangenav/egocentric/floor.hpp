@@ -123,6 +123,27 @@ void window_height_range(std::span<const Point<3, Scalar>> points, std::size_t w
 
 }  // namespace detail
 
+/// The class of point (r, c) of an organised grid of `height` rows (see classify_points).
+template <std::floating_point Scalar>
+[[nodiscard]] PointClass classify_point(std::span<const Point<3, Scalar>> points, std::size_t width,
+                                        std::size_t height, std::size_t r, std::size_t c,
+                                        const FloorClassifierParams<Scalar>& params) {
+  const Point<3, Scalar>& p = points[r * width + c];
+  if (!p.allFinite()) return PointClass::invalid;
+  const Scalar z = p.z();
+  if (z < -params.below_floor) return PointClass::below_floor;
+  // Neighbours below floor level do not count: a floor point at the edge of a stair is still
+  // floor (the stair gets its own artificial obstacle).
+  Scalar lo, hi;
+  detail::window_height_range(points, width, height, r, c, params.window_radius,
+                              params.window_steps, params.below_floor, lo, hi);
+  if (std::abs(z) <= params.floor_band && (z - lo <= params.step_height || z <= params.min_height))
+    return PointClass::floor;
+  if (z >= params.ceiling_height && hi - lo <= params.step_height) return PointClass::ceiling;
+  if (z >= params.wall_height) return PointClass::wall;
+  return PointClass::obstacle;
+}
+
 /// Classifies the points of an organised grid (row-major, `width` columns; rows = consecutive
 /// scans of a sweep or image rows, columns = beams or pixels; non-finite points are invalid) into
 /// `classes` (resized to the point count). Heights z are above the floor in the robot frame.
@@ -138,34 +159,8 @@ void classify_points(std::span<const Point<3, Scalar>> points, std::size_t width
   const std::size_t height = points.size() / width;
   classes.resize(points.size());
   for (std::size_t r = 0; r < height; ++r)
-    for (std::size_t c = 0; c < width; ++c) {
-      const std::size_t i = r * width + c;
-      const Point<3, Scalar>& p = points[i];
-      if (!p.allFinite()) {
-        classes[i] = PointClass::invalid;
-        continue;
-      }
-      const Scalar z = p.z();
-      if (z < -params.below_floor) {
-        classes[i] = PointClass::below_floor;
-        continue;
-      }
-      // Neighbours below floor level do not count: a floor point at the edge of a stair is still
-      // floor (the stair gets its own artificial obstacle).
-      Scalar lo, hi;
-      detail::window_height_range(points, width, height, r, c, params.window_radius,
-                                  params.window_steps, params.below_floor, lo, hi);
-      const bool flat = hi - lo <= params.step_height;
-      if (std::abs(z) <= params.floor_band &&
-          (z - lo <= params.step_height || z <= params.min_height))
-        classes[i] = PointClass::floor;
-      else if (z >= params.ceiling_height && flat)
-        classes[i] = PointClass::ceiling;
-      else if (z >= params.wall_height)
-        classes[i] = PointClass::wall;
-      else
-        classes[i] = PointClass::obstacle;
-    }
+    for (std::size_t c = 0; c < width; ++c)
+      classes[r * width + c] = classify_point(points, width, height, r, c, params);
 }
 
 /// The same for an organised Cloud (width x height).
