@@ -10,7 +10,9 @@
 // The file's user units are metres with y negated (SVG's y points down), so a coordinate read
 // in the file is the world coordinate, up to the sign of y; numbers are written with as many
 // decimals as a tenth of a pixel needs, which keeps a 100k-point drawing near 2 MB. Line widths,
-// point radii and font sizes are given in pixels and do not depend on the zoom.
+// point radii and font sizes are given in pixels and do not depend on the zoom. Text and the
+// footer are written in pixel units under a `translate(..) scale(1/pixels-per-metre)` transform:
+// renderers such as librsvg garble glyphs whose font size is a fraction of a user unit.
 //
 //   rangenav::io::SvgDrawing svg;
 //   svg.layer("map").points(map_cloud, {.stroke = "#444"});
@@ -335,14 +337,14 @@ class SvgDrawing {
     size(out, f, f.height_px);
     out += "\" font-family=\"sans-serif\" stroke-linecap=\"round\" stroke-linejoin=\"round\">\n";
     if (options_.background != "none") {
-      out += "<rect x=\"";
-      num(out, f, f.x0);
+      out += "<rect x=\"";  // exactly the view box
+      size(out, f, f.x0 * f.scale);
       out += "\" y=\"";
-      num(out, f, f.y0);
+      size(out, f, f.y0 * f.scale);
       out += "\" width=\"";
-      num(out, f, f.width_px / f.scale);
+      size(out, f, f.width_px);
       out += "\" height=\"";
-      num(out, f, f.height_px / f.scale);
+      size(out, f, f.height_px);
       out += "\" fill=\"";
       detail::append_escaped(out, options_.background);
       out += "\"/>\n";
