@@ -99,11 +99,15 @@ struct IcpResult {
   Transform<D, Scalar> transform = Transform<D, Scalar>::Identity();  ///< data -> model frame
   bool converged = false;
   IcpTermination reason = IcpTermination::max_iterations;
-  int iterations = 0;            ///< iterations run (each with a correspondence search)
-  std::size_t inlier_count = 0;  ///< pairs kept in the last iteration
-  std::size_t data_count = 0;    ///< finite data points
-  Scalar rmse = 0;               ///< RMS pair distance under the final transform (m)
-  Scalar fitness = 0;            ///< inlier_count / data_count
+  int iterations = 0;             ///< iterations run (each with a correspondence search)
+  std::size_t matched_count = 0;  ///< data points the last search paired (before rejectors)
+  std::size_t inlier_count = 0;   ///< pairs kept by the rejectors in the last iteration
+  std::size_t data_count = 0;     ///< finite data points
+  Scalar rmse = 0;                ///< RMS distance of the kept pairs under the final transform (m)
+  /// matched_count / data_count: the fraction of data points with a model point within the
+  /// search bound (Open3D's fitness). With a unique-pair rejector and a sparser model,
+  /// inlier_count / data_count would be bounded by the density ratio instead.
+  Scalar fitness = 0;
   /// Smallest normalised eigenvalue of the point-to-plane normal equations at the solution,
   /// when it was evaluated (see IcpParams::degeneracy_threshold).
   std::optional<Scalar> smallest_eigenvalue;
@@ -203,6 +207,7 @@ class BasicIcp {
       ctx.transform = transform;
       result.iterations = it + 1;
       match(model, ctx);
+      result.matched_count = pairs_.size();
       std::apply([&](auto&... r) { (reject_with(r, ctx), ...); }, rejectors);
       if (pairs_.size() < min_pairs) {
         result.reason = IcpTermination::too_few_pairs;
@@ -235,9 +240,9 @@ class BasicIcp {
         sum_sq += (c.model - transform * c.data).squaredNorm();
       result.rmse = std::sqrt(sum_sq / static_cast<Scalar>(pairs_.size()));
     }
-    result.fitness = data_.empty()
-                         ? Scalar(0)
-                         : static_cast<Scalar>(pairs_.size()) / static_cast<Scalar>(data_.size());
+    result.fitness = data_.empty() ? Scalar(0)
+                                   : static_cast<Scalar>(result.matched_count) /
+                                         static_cast<Scalar>(data_.size());
     if (params.check_degeneracy && result.reason != IcpTermination::too_few_pairs &&
         result.reason != IcpTermination::degenerate)
       evaluate_degeneracy(model, transform, result);

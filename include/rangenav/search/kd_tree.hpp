@@ -78,6 +78,10 @@ class RangeTree {
   void rebase(const Point<D, Scalar>* data) { adaptor_.data = data + offset_; }
 
   [[nodiscard]] std::size_t offset() const { return offset_; }
+  /// Bytes held by the tree structure (nodes and index array), not the points.
+  [[nodiscard]] std::size_t memory_bytes() const {
+    return static_cast<std::size_t>(index_->usedMemory(*index_));
+  }
   [[nodiscard]] std::size_t size() const { return adaptor_.count; }
 
   /// Runs a result collector; indices it receives are local to this tree.
@@ -254,6 +258,13 @@ class GrowingKdTree {
   [[nodiscard]] bool empty() const { return points_.empty(); }
   [[nodiscard]] const point_type& point(std::size_t i) const { return points_[i]; }
   [[nodiscard]] const std::vector<point_type>& points() const { return points_; }
+  /// Bytes held: the point array plus every tree's nodes and index array.
+  [[nodiscard]] std::size_t memory_bytes() const {
+    std::size_t bytes = points_.capacity() * sizeof(point_type);
+    for (const auto& tree : trees_)
+      bytes += tree->memory_bytes();
+    return bytes;
+  }
   /// Number of static trees in the chain (at most log2(size) + 1).
   [[nodiscard]] std::size_t tree_count() const { return trees_.size(); }
 
