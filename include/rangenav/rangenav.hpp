@@ -15,6 +15,7 @@
 #include "rangenav/io/pcd.hpp"
 #include "rangenav/io/slam_relations.hpp"
 #include "rangenav/io/svg.hpp"
+#include "rangenav/io/trajectory.hpp"
 #include "rangenav/mapping/incremental_mapper.hpp"
 #include "rangenav/mapping/key_frame.hpp"
 #include "rangenav/mapping/sparse_point_map.hpp"
@@ -28,6 +29,9 @@
 #include "rangenav/scan/pitching.hpp"
 #include "rangenav/search/kd_tree.hpp"
 #include "rangenav/search/nearest_neighbor_search.hpp"
+#include "rangenav/sim/robot.hpp"
+#include "rangenav/sim/sensors.hpp"
 #include "rangenav/sim/world.hpp"
 #include "rangenav/sim/world_file.hpp"
+#include "rangenav/sim/worlds.hpp"
 // clang-format on
