@@ -25,6 +25,7 @@
 #include "rangenav/io/carmen.hpp"
 #include "rangenav/io/slam_relations.hpp"
 #include "rangenav/io/svg.hpp"
+#include "rangenav/io/trajectory.hpp"
 #include "rangenav/mapping/incremental_mapper.hpp"
 #include "rangenav/scan/laser_scan.hpp"
 #include "rangenav/sim/world.hpp"
@@ -125,7 +126,7 @@ int main(int argc, char** argv) try {
   // The mapper's defaults are the papers' values: eps_D = 0.15 m, key frames at 0.5 m / 25°,
   // fitness rejection below 0.5; PaperIcp = decaying distance threshold + unique model points.
   rangenav::IncrementalMapper<2> mapper;
-  std::vector<rangenav::io::StampedPose2> trajectory;
+  std::vector<rangenav::io::StampedPose2d> trajectory;
   std::size_t rejected = 0;
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t i = 0; i < in.scans.size(); ++i) {
@@ -139,16 +140,7 @@ int main(int argc, char** argv) try {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   std::filesystem::create_directories(out_dir);
-  {
-    std::ofstream traj(out_dir / "trajectory.txt");
-    traj << "# timestamp x y theta (map frame = frame of the first scan)\n";
-    char line[160];
-    for (const auto& p : trajectory) {
-      std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.6f\n", p.timestamp, p.pose.x, p.pose.y,
-                    p.pose.theta);
-      traj << line;
-    }
-  }
+  rangenav::io::write_xytheta(out_dir / "trajectory.txt", trajectory);
   rangenav::io::SvgDrawing svg;
   svg.layer("sparse map").points(mapper.map().points(), {.stroke = "#333", .point_radius_px = 1.0});
   std::vector<rangenav::Point2d> path;

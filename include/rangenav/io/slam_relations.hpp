@@ -20,6 +20,7 @@
 #include "rangenav/core/angles.hpp"
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
+#include "rangenav/io/trajectory.hpp"
 
 namespace rangenav::io {
 
@@ -27,12 +28,6 @@ struct SlamRelation {
   double timestamp1 = 0;
   double timestamp2 = 0;
   Pose2d delta;  ///< true relative pose (x, y, yaw)
-};
-
-/// One timestamped 2D pose of a trajectory.
-struct StampedPose2 {
-  double timestamp = 0;
-  Pose2d pose;
 };
 
 /// Reads a relations file. Throws io_error naming file and line for malformed lines.
@@ -87,21 +82,21 @@ inline ErrorStats stats_of(const std::vector<double>& v) {
 }
 }  // namespace detail
 
-/// Evaluates a trajectory (sorted by timestamp) against relations; a relation is used when both
-/// timestamps have a trajectory pose within `max_time_gap` seconds (the evaluator's 0.1 s).
-/// `filter(relation)` selects a subset (e.g. the short relations).
+/// Evaluates a trajectory (sorted by timestamp; io/trajectory.hpp reads and writes them) against
+/// relations; a relation is used when both timestamps have a trajectory pose within `max_time_gap`
+/// seconds (the evaluator's 0.1 s). `filter(relation)` selects a subset (e.g. the short relations).
 template <class Filter>
 [[nodiscard]] RelationsEvaluation evaluate_slam_relations(
-    const std::vector<StampedPose2>& trajectory, const std::vector<SlamRelation>& relations,
+    const std::vector<StampedPose2d>& trajectory, const std::vector<SlamRelation>& relations,
     Filter filter, double max_time_gap = 0.1) {
-  const auto find = [&](double t) -> const StampedPose2* {
+  const auto find = [&](double t) -> const StampedPose2d* {
     const auto it =
         std::lower_bound(trajectory.begin(), trajectory.end(), t,
-                         [](const StampedPose2& p, double value) { return p.timestamp < value; });
-    const StampedPose2* best = nullptr;
+                         [](const StampedPose2d& p, double value) { return p.timestamp < value; });
+    const StampedPose2d* best = nullptr;
     if (it != trajectory.end()) best = &*it;
     if (it != trajectory.begin()) {
-      const StampedPose2* prev = &*(it - 1);
+      const StampedPose2d* prev = &*(it - 1);
       if (!best || std::abs(prev->timestamp - t) < std::abs(best->timestamp - t)) best = prev;
     }
     return best && std::abs(best->timestamp - t) <= max_time_gap ? best : nullptr;
@@ -110,8 +105,8 @@ template <class Filter>
   std::vector<double> trans, rot;
   for (const auto& r : relations) {
     if (!filter(r)) continue;
-    const StampedPose2* a = find(r.timestamp1);
-    const StampedPose2* b = find(r.timestamp2);
+    const StampedPose2d* a = find(r.timestamp1);
+    const StampedPose2d* b = find(r.timestamp2);
     if (!a || !b) {
       ++eval.missing;
       continue;
@@ -127,34 +122,10 @@ template <class Filter>
 }
 
 [[nodiscard]] inline RelationsEvaluation evaluate_slam_relations(
-    const std::vector<StampedPose2>& trajectory, const std::vector<SlamRelation>& relations,
+    const std::vector<StampedPose2d>& trajectory, const std::vector<SlamRelation>& relations,
     double max_time_gap = 0.1) {
   return evaluate_slam_relations(
       trajectory, relations, [](const SlamRelation&) { return true; }, max_time_gap);
-}
-
-/// Reads a trajectory file of `timestamp x y theta` lines (# comments allowed).
-[[nodiscard]] inline std::vector<StampedPose2> read_trajectory_2d(
-    const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw io_error("rangenav: read_trajectory_2d: cannot open '" + path.string() + "'");
-  std::vector<StampedPose2> out;
-  std::string line;
-  std::size_t number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    const auto first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream s(line);
-    StampedPose2 p;
-    if (!(s >> p.timestamp >> p.pose.x >> p.pose.y >> p.pose.theta))
-      throw io_error("rangenav: read_trajectory_2d: " + path.string() + ":" +
-                     std::to_string(number) + ": expected 'timestamp x y theta'");
-    out.push_back(p);
-  }
-  std::sort(out.begin(), out.end(),
-            [](const auto& a, const auto& b) { return a.timestamp < b.timestamp; });
-  return out;
 }
 
 }  // namespace rangenav::io
