@@ -13,6 +13,7 @@
 #include "rangenav/io/line_reader.hpp"
 #include "rangenav/io/pcd.hpp"
 #include "rangenav/io/svg.hpp"
+#include "rangenav/io/trajectory.hpp"
 #include "rangenav/scan/depth_image.hpp"
 #include "rangenav/scan/laser_scan.hpp"
 #include "rangenav/scan/pitching.hpp"
