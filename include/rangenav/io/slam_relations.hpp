@@ -1,131 +1,149 @@
 #pragma once
-// The Freiburg SLAM benchmark's relations (Kümmerle et al. 2009, "On measuring the accuracy of
-// SLAM algorithms"): reading a relations file and evaluating a trajectory against it.
+// Ground-truth relations of the Freiburg SLAM benchmark (Kümmerle et al., "On measuring the
+// accuracy of SLAM algorithms", Autonomous Robots 27(4), 2009) and their error metric.
 //
-// A relations line is `timestamp1 timestamp2 x y z roll pitch yaw` (whitespace-separated): the
-// true relative pose from the pose at timestamp1 to the pose at timestamp2 in the first pose's
-// frame. For every relation δ and the estimate δ* = x1^-1 ⊕ x2 the error is e = δ ⊖ δ*; the
-// benchmark reports the mean and standard deviation of |trans(e)| (m) and |rot(e)| (deg).
+// A relations file has one relation per line, whitespace-separated:
+//   timestamp1 timestamp2 x y z roll pitch yaw
+// the true pose of the scan at timestamp2 in the frame of the scan at timestamp1 (m, rad); for
+// 2D logs z, roll and pitch are 0. The metric compares each relation δ_ij with the estimate
+// δ*_ij = x_i⁻¹ ⊕ x_j of a trajectory: the translational error is ‖trans(δ_ij ⊖ δ*_ij)‖, the
+// rotational error |rot(δ_ij ⊖ δ*_ij)|; "absolute" figures are the mean and standard deviation of
+// these over the relations.
+//
+// A malformed line raises io_error naming the file and the 1-based line, e.g.
+//   rangenav: slam_relations: mit-csail.relations:3: expected 8 fields, found 7
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <filesystem>
-#include <fstream>
-#include <numbers>
-#include <sstream>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "rangenav/core/angles.hpp"
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
-#include "rangenav/io/trajectory.hpp"
+#include "rangenav/io/line_reader.hpp"
 
 namespace rangenav::io {
 
+/// One ground-truth relation: the pose of the scan at `second` in the frame of the scan at
+/// `first`.
 struct SlamRelation {
-  double timestamp1 = 0;
-  double timestamp2 = 0;
-  Pose2d delta;  ///< true relative pose (x, y, yaw)
+  double first{0.0};   ///< timestamp1 (s)
+  double second{0.0};  ///< timestamp2 (s)
+  Pose2d delta{};      ///< (x, y, yaw)
 };
 
-/// Reads a relations file. Throws io_error naming file and line for malformed lines.
-[[nodiscard]] inline std::vector<SlamRelation> read_slam_relations(
-    const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw io_error("rangenav: read_slam_relations: cannot open '" + path.string() + "'");
-  std::vector<SlamRelation> out;
-  std::string line;
-  std::size_t number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    std::istringstream s(line);
-    double t1, t2, x, y, z, roll, pitch, yaw;
-    if (!(s >> t1 >> t2 >> x >> y >> z >> roll >> pitch >> yaw))
-      throw io_error("rangenav: read_slam_relations: " + path.string() + ":" +
-                     std::to_string(number) +
-                     ": expected 8 numbers 'timestamp1 timestamp2 x y z roll pitch yaw'");
-    out.push_back({t1, t2, {x, y, yaw}});
+/// Reads a relations file (plain or gzip). Empty lines and lines starting with '#' are skipped.
+inline std::vector<SlamRelation> read_slam_relations(const std::filesystem::path& path) {
+  LineReader reader(path, "slam_relations");
+  std::vector<SlamRelation> relations;
+  std::vector<std::string_view> tokens;
+  std::string_view line;
+  while (reader.next(line)) {
+    detail::split_whitespace(line, tokens);
+    if (tokens.empty() || tokens.front().starts_with('#')) continue;
+    if (tokens.size() != 8)
+      reader.fail_line("expected 8 fields, found " + std::to_string(tokens.size()));
+    double v[8];
+    for (std::size_t k = 0; k < 8; ++k)
+      if (!detail::parse_double(tokens[k], v[k]) || !std::isfinite(v[k]))
+        reader.fail_line("field " + std::to_string(k + 1) + " is not a finite number: '" +
+                         std::string(tokens[k]) + "'");
+    relations.push_back({v[0], v[1], {v[2], v[3], normalize_angle(v[7])}});
   }
-  return out;
+  return relations;
 }
 
-/// Mean and standard deviation of one error kind over a set of relations.
-struct ErrorStats {
-  std::size_t count = 0;
-  double mean = 0;
-  double stddev = 0;
+/// Mean and standard deviation of the per-relation errors of one group of relations.
+struct RelationErrors {
+  std::size_t count{0};            ///< relations evaluated
+  double translation_mean{0.0};    ///< mean ‖trans(e)‖ (m)
+  double translation_stddev{0.0};  ///< (m)
+  double rotation_mean{0.0};       ///< mean |rot(e)| (rad)
+  double rotation_stddev{0.0};     ///< (rad)
 };
 
-struct RelationsEvaluation {
-  ErrorStats translation;   ///< m
-  ErrorStats rotation;      ///< deg
-  std::size_t missing = 0;  ///< relations with no trajectory pose within max_time_gap
+/// The metric over all relations, and over the relations whose timestamps are less than
+/// `local_gap` apart ("short": local accuracy) or not ("long": mostly loop closures).
+struct RelationEvaluation {
+  RelationErrors all, short_gap, long_gap;
+  std::size_t missing{0};  ///< relations with a timestamp the trajectory has no pose for
 };
 
-namespace detail {
-inline ErrorStats stats_of(const std::vector<double>& v) {
-  ErrorStats s;
-  s.count = v.size();
-  if (v.empty()) return s;
-  double sum = 0;
-  for (double x : v)
-    sum += x;
-  s.mean = sum / static_cast<double>(v.size());
-  double var = 0;
-  for (double x : v)
-    var += (x - s.mean) * (x - s.mean);
-  s.stddev = std::sqrt(var / static_cast<double>(v.size()));
-  return s;
-}
-}  // namespace detail
-
-/// Evaluates a trajectory (sorted by timestamp; io/trajectory.hpp reads and writes them) against
-/// relations; a relation is used when both timestamps have a trajectory pose within `max_time_gap`
-/// seconds (the evaluator's 0.1 s). `filter(relation)` selects a subset (e.g. the short relations).
-template <class Filter>
-[[nodiscard]] RelationsEvaluation evaluate_slam_relations(
-    const std::vector<StampedPose2d>& trajectory, const std::vector<SlamRelation>& relations,
-    Filter filter, double max_time_gap = 0.1) {
-  const auto find = [&](double t) -> const StampedPose2d* {
-    const auto it =
-        std::lower_bound(trajectory.begin(), trajectory.end(), t,
-                         [](const StampedPose2d& p, double value) { return p.timestamp < value; });
-    const StampedPose2d* best = nullptr;
-    if (it != trajectory.end()) best = &*it;
-    if (it != trajectory.begin()) {
-      const StampedPose2d* prev = &*(it - 1);
-      if (!best || std::abs(prev->timestamp - t) < std::abs(best->timestamp - t)) best = prev;
+/// Evaluates a trajectory given as poses at `timestamps` (increasing) against `relations`. A
+/// relation's timestamp is matched to the nearest trajectory timestamp within `max_time_offset`
+/// seconds; relations without a match are counted as missing. Throws invalid_argument for
+/// mismatched sizes or timestamps that do not increase.
+inline RelationEvaluation evaluate_slam_relations(std::span<const SlamRelation> relations,
+                                                  std::span<const double> timestamps,
+                                                  std::span<const Pose2d> poses,
+                                                  double local_gap = 2.0,
+                                                  double max_time_offset = 1e-3) {
+  constexpr std::string_view where = "evaluate_slam_relations";
+  if (timestamps.size() != poses.size())
+    ::rangenav::detail::throw_invalid_argument(
+        where, "poses.size()", poses.size(),
+        "must equal timestamps.size() = " + std::to_string(timestamps.size()));
+  for (std::size_t i = 1; i < timestamps.size(); ++i)
+    if (!(timestamps[i] > timestamps[i - 1]))
+      ::rangenav::detail::throw_invalid_argument(where, "timestamps[" + std::to_string(i) + "]",
+                                                 timestamps[i], "must exceed the one before");
+  ::rangenav::detail::require_non_negative(where, "max_time_offset", max_time_offset);
+  const auto find = [&](double t) -> const Pose2d* {
+    const auto it = std::lower_bound(timestamps.begin(), timestamps.end(), t);
+    std::size_t best = timestamps.size();
+    if (it != timestamps.end()) best = static_cast<std::size_t>(it - timestamps.begin());
+    if (it != timestamps.begin()) {
+      const auto before = static_cast<std::size_t>(it - timestamps.begin()) - 1;
+      if (best == timestamps.size() || t - timestamps[before] < timestamps[best] - t) best = before;
     }
-    return best && std::abs(best->timestamp - t) <= max_time_gap ? best : nullptr;
+    if (best == timestamps.size() || std::abs(timestamps[best] - t) > max_time_offset)
+      return nullptr;
+    return &poses[best];
   };
-  RelationsEvaluation eval;
-  std::vector<double> trans, rot;
-  for (const auto& r : relations) {
-    if (!filter(r)) continue;
-    const StampedPose2d* a = find(r.timestamp1);
-    const StampedPose2d* b = find(r.timestamp2);
-    if (!a || !b) {
-      ++eval.missing;
+  struct Sums {
+    std::size_t n{0};
+    double t{0}, t_sq{0}, r{0}, r_sq{0};
+    void add(double et, double er) {
+      ++n;
+      t += et;
+      t_sq += et * et;
+      r += er;
+      r_sq += er * er;
+    }
+    [[nodiscard]] RelationErrors finish() const {
+      RelationErrors e;
+      e.count = n;
+      if (n == 0) return e;
+      const auto c = static_cast<double>(n);
+      e.translation_mean = t / c;
+      e.rotation_mean = r / c;
+      e.translation_stddev =
+          std::sqrt(std::max(t_sq / c - e.translation_mean * e.translation_mean, 0.0));
+      e.rotation_stddev = std::sqrt(std::max(r_sq / c - e.rotation_mean * e.rotation_mean, 0.0));
+      return e;
+    }
+  } all, near, far;
+  RelationEvaluation result;
+  for (const auto& rel : relations) {
+    const Pose2d* a = find(rel.first);
+    const Pose2d* b = find(rel.second);
+    if (a == nullptr || b == nullptr) {
+      ++result.missing;
       continue;
     }
-    const Pose2d estimate = relative(a->pose, b->pose);
-    const Pose2d e = relative(estimate, r.delta);  // δ ⊖ δ*
-    trans.push_back(std::hypot(e.x, e.y));
-    rot.push_back(std::abs(normalize_angle(e.theta)) * 180.0 / std::numbers::pi);
+    const Pose2d error = relative(relative(*a, *b), rel.delta);  // δ* ⁻¹ ⊕ δ
+    const double et = std::hypot(error.x, error.y), er = std::abs(error.theta);
+    all.add(et, er);
+    (std::abs(rel.second - rel.first) < local_gap ? near : far).add(et, er);
   }
-  eval.translation = detail::stats_of(trans);
-  eval.rotation = detail::stats_of(rot);
-  return eval;
-}
-
-[[nodiscard]] inline RelationsEvaluation evaluate_slam_relations(
-    const std::vector<StampedPose2d>& trajectory, const std::vector<SlamRelation>& relations,
-    double max_time_gap = 0.1) {
-  return evaluate_slam_relations(
-      trajectory, relations, [](const SlamRelation&) { return true; }, max_time_gap);
+  result.all = all.finish();
+  result.short_gap = near.finish();
+  result.long_gap = far.finish();
+  return result;
 }
 
 }  // namespace rangenav::io

@@ -678,10 +678,10 @@ class SvgDrawing {
         break;
       }
       case Kind::text: {
-        out += "<text";
-        xy_attr(out, f, e.pts[0], "x", "y");
+        out += "<text ";
+        pixel_frame(out, f, e.pts[0].x(), -e.pts[0].y());
         out += " font-size=\"";
-        size(out, f, e.value);
+        detail::append_number(out, e.value, 2);
         out += '"';
         paint(out, f, "none", s.fill != "none" ? s.fill : s.stroke, 0.0, s.opacity);
         out += '>';
@@ -692,23 +692,28 @@ class SvgDrawing {
     }
   }
 
+  // "translate(x y) scale(1/scale)": the frame of pixel-sized content (text, footer) placed at
+  // the user-space point (x, y). Renderers hint glyphs at the font size they are given, so text
+  // is never written with a font size of a fraction of a user unit.
+  void pixel_frame(std::string& out, const Frame& f, double x, double y) const {
+    out += "transform=\"translate(";
+    num(out, f, x);
+    out += ' ';
+    num(out, f, y);
+    out += ") scale(";
+    detail::append_number(out, 1.0 / f.scale, f.decimals + 5);
+    out += ")\"";
+  }
+
+  // The footer is drawn in pixels from the picture's top-left corner.
   void write_footer(std::string& out, const Frame& f) const {
-    const auto ux = [&](double x_px) { return f.x0 + x_px / f.scale; };
-    const auto uy = [&](double y_px) { return f.y0 + y_px / f.scale; };
-    const auto move_to = [&](std::string& to, char command, double x_px, double y_px) {
-      to += command;
-      num(to, f, ux(x_px));
-      to += ' ';
-      num(to, f, uy(y_px));
-    };
-    const auto text_at = [&](std::string& to, double x_px, double y_px, std::string_view content) {
+    const auto px = [](std::string& to, double v) { detail::append_number(to, v, 1); };
+    const auto text_at = [&](std::string& to, double x, double y, std::string_view content) {
       to += "<text x=\"";
-      num(to, f, ux(x_px));
+      px(to, x);
       to += "\" y=\"";
-      num(to, f, uy(y_px));
-      to += "\" font-size=\"";
-      size(to, f, font_px);
-      to += "\" fill=\"black\">";
+      px(to, y);
+      to += "\">";
       detail::append_escaped(to, content);
       to += "</text>\n";
     };
@@ -718,19 +723,21 @@ class SvgDrawing {
       if (l == scale_bar_slot) {
         // |------| with end ticks, then its label.
         const double x_end = x + f.scale_bar_m * f.scale;
-        scale_bar += "<path d=\"";
-        move_to(scale_bar, 'M', x, y - 4);
-        scale_bar += 'V';
-        num(scale_bar, f, uy(y + 4));
-        move_to(scale_bar, 'M', x, y);
+        scale_bar += "<path d=\"M";
+        px(scale_bar, x);
+        scale_bar += ' ';
+        px(scale_bar, y - 4);
+        scale_bar += "v8M";
+        px(scale_bar, x);
+        scale_bar += ' ';
+        px(scale_bar, y);
         scale_bar += 'H';
-        num(scale_bar, f, ux(x_end));
-        move_to(scale_bar, 'M', x_end, y - 4);
-        scale_bar += 'V';
-        num(scale_bar, f, uy(y + 4));
-        scale_bar += '"';
-        paint(scale_bar, f, "black", "none", 2.0, 1.0);
-        scale_bar += "/>\n";
+        px(scale_bar, x_end);
+        scale_bar += 'M';
+        px(scale_bar, x_end);
+        scale_bar += ' ';
+        px(scale_bar, y - 4);
+        scale_bar += "v8\" stroke=\"black\" stroke-width=\"2\" fill=\"none\"/>\n";
         text_at(scale_bar, x_end + 6, y + 4, detail::length_label(f.scale_bar_m));
         return;
       }
@@ -740,17 +747,23 @@ class SvgDrawing {
                            })->style;
       const std::string& colour =
           first.stroke != "none" || first.fill == "none" ? first.stroke : first.fill;
-      legend += "<path d=\"";
-      move_to(legend, 'M', x, y);
-      legend += 'H';
-      num(legend, f, ux(x + 16));
-      legend += '"';
-      paint(legend, f, colour, "none", 4.0, 1.0);
-      legend += "/>\n";
+      legend += "<path d=\"M";
+      px(legend, x);
+      legend += ' ';
+      px(legend, y);
+      legend += "h16\" stroke=\"";
+      detail::append_escaped(legend, colour);
+      legend += "\" stroke-width=\"4\" fill=\"none\"/>\n";
       text_at(legend, x + 22, y + 4, layers_[l].name);
     });
+    out += "<g id=\"footer\" ";
+    pixel_frame(out, f, f.x0, f.y0);
+    out += " font-size=\"";
+    px(out, font_px);
+    out += "\" fill=\"black\">\n";
     if (!scale_bar.empty()) out.append("<g id=\"scale-bar\">\n").append(scale_bar).append("</g>\n");
     if (!legend.empty()) out.append("<g id=\"legend\">\n").append(legend).append("</g>\n");
+    out += "</g>\n";
   }
 
   SvgOptions options_;
