@@ -322,9 +322,9 @@ void resize_pcd_cloud(const PcdHeader& h, const PcdLayout& l, Cloud<3, Scalar>& 
   if (l.has_normals) cloud.normals.resize(h.points);
 }
 
-/// Decodes fixed-size records: field slot s of point i is at base + s.offset * column_scale +
-/// i * stride (binary: stride = point size, column_scale = 1; binary_compressed: stride = the
-/// field's bytes, column_scale = the point count).
+/// Decodes fixed-size records. DATA binary: field s of point i is at base + i * point_size +
+/// s.offset. binary_compressed (columns): the field's column starts at base + s.offset * n, so
+/// point i's value is at base + s.offset * n + i * s.stride.
 template <class Scalar>
 void decode_pcd_records(const unsigned char* base, const PcdLayout& l, std::size_t point_size,
                         bool columns, Cloud<3, Scalar>& cloud) {

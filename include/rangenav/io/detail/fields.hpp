@@ -213,14 +213,6 @@ std::uint8_t saturate_u8(T v) {
   }
 }
 
-/// The value of type t at p as a colour channel (saturated to 0..255).
-inline std::uint8_t load_channel(const unsigned char* p, ValueType t) {
-  if (t == ValueType::uint8) return *p;
-  if (is_floating(t)) return saturate_u8(load_as<double>(p, t));
-  if (t == ValueType::uint64) return saturate_u8(load_le<std::uint64_t>(p));
-  return saturate_u8(load_as<std::int64_t>(p, t));
-}
-
 // ---- text -----------------------------------------------------------------------------------
 
 /// Walks a buffer line by line, counting 1-based line numbers.
