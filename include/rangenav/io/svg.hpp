@@ -743,19 +743,41 @@ class SvgDrawing {
         text_at(scale_bar, x_end + 6, y + 4, detail::length_label(f.scale_bar_m));
         return;
       }
-      // A thick swatch in the colour of the layer's first shape, then the layer's name.
-      const Style& first = std::find_if(elements_.begin(), elements_.end(), [&](const Element& e) {
-                             return e.layer == l;
-                           })->style;
-      const std::string& colour =
-          first.stroke != "none" || first.fill == "none" ? first.stroke : first.fill;
-      legend += "<path d=\"M";
-      px(legend, x);
-      legend += ' ';
-      px(legend, y);
-      legend += "h16\" stroke=\"";
-      detail::append_escaped(legend, colour);
-      legend += "\" stroke-width=\"4\" fill=\"none\"/>\n";
+      // A swatch that looks like the layer's first shape: a dot for points, a filled box for
+      // filled areas, else a thick line; then the layer's name.
+      const Element& first = *std::find_if(elements_.begin(), elements_.end(),
+                                           [&](const Element& e) { return e.layer == l; });
+      const Style& style = first.style;
+      const bool area =
+          (first.kind == Kind::polygon || first.kind == Kind::circle) && style.fill != "none";
+      if (area) {
+        legend += "<rect x=\"";
+        px(legend, x + 1);
+        legend += "\" y=\"";
+        px(legend, y - 5);
+        legend += "\" width=\"14\" height=\"10\" fill=\"";
+        detail::append_escaped(legend, style.fill);
+        legend += "\" stroke=\"";
+        detail::append_escaped(legend, style.stroke);
+        legend += '"';
+      } else {
+        const bool dot = first.kind == Kind::points;
+        legend += "<path d=\"M";
+        px(legend, dot ? x + 8 : x);
+        legend += ' ';
+        px(legend, y);
+        legend += dot ? "h0" : "h16";
+        legend += "\" stroke=\"";
+        detail::append_escaped(legend, style.stroke != "none" ? style.stroke : style.fill);
+        legend += dot ? "\" stroke-width=\"7\"" : "\" stroke-width=\"4\"";
+        legend += " fill=\"none\"";
+      }
+      if (style.opacity < 1.0) {
+        legend += " opacity=\"";
+        detail::append_number(legend, std::max(style.opacity, 0.3), 3);
+        legend += '"';
+      }
+      legend += "/>\n";
       text_at(legend, x + 22, y + 4, layers_[l].name);
     });
     out += "<g id=\"footer\" ";
