@@ -273,8 +273,8 @@ TEST_CASE("mcl: tracking in the simulated office corridor stays within a few cm"
   REQUIRE(run.position_errors.size() > 100);
   const double mean_err = mean(run.position_errors);
   const double max_err = *std::max_element(run.position_errors.begin(), run.position_errors.end());
-  INFO("mean " << mean_err << " m, max " << max_err << " m over " << run.position_errors.size()
-               << " scans");
+  WARN("corridor tracking: mean " << mean_err << " m, max " << max_err << " m over "
+                                  << run.position_errors.size() << " scans");
   CHECK(mean_err < 0.05);
   CHECK(max_err < 0.2);
   CHECK(mean(run.heading_errors) < 0.02);
@@ -306,9 +306,9 @@ TEST_CASE("mcl: global localization converges in an asymmetric corridor", "[loca
   const Run run = drive(scene.world, grid, {1.0, 1.0, 0.0}, 18.0, Start::global, 20000, 3, lp);
   const std::size_t n = run.position_errors.size();
   REQUIRE(n > 20);
-  INFO("final error " << run.position_errors.back() << " m, " << run.heading_errors.back()
-                      << " rad, particles " << run.particle_counts.front() << " -> "
-                      << run.particle_counts.back());
+  WARN("global localization: final error "
+       << run.position_errors.back() << " m, " << run.heading_errors.back() << " rad, particles "
+       << run.particle_counts.front() << " -> " << run.particle_counts.back());
   // Converged over the last quarter of the run: the paper's success criterion.
   for (std::size_t i = 3 * n / 4; i < n; ++i) {
     CHECK(run.position_errors[i] < 0.3);
