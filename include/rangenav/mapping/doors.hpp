@@ -172,6 +172,28 @@ struct DoorModel {
   return true;
 }
 
+/// Clears the cells each door's leaf sweeps over its observed opening range from the static grid
+/// (they are not static), keeping the hinge cell.
+inline void remove_doors(OccupancyGrid& grid, std::span<const DoorModel> doors) {
+  const double r = grid.resolution();
+  for (const auto& d : doors) {
+    const double span = d.opening_max - d.opening_min;
+    const int steps = std::max(1, static_cast<int>(std::ceil(span * d.leaf_length / (r / 2))));
+    for (int k = 0; k <= steps; ++k) {
+      const double opening = d.opening_min + span * k / steps;
+      const Point2d end = d.leaf_end(opening);
+      // Half a cell beyond the leaf's end and to either side of it.
+      const Point2d u = (end - d.hinge).normalized(), n(-u.y(), u.x());
+      for (const double side : {-0.5, 0.0, 0.5})
+        grid.trace(d.hinge + n * (side * r), end + u * (r / 2) + n * (side * r),
+                   [&](const OccupancyGrid::Index& c) {
+                     if (grid.contains(c) && (grid.cell_center(c) - d.hinge).norm() > r)
+                       grid.set_log_odds(c, log_odds(grid.params().min_probability));
+                   });
+    }
+  }
+}
+
 class DoorDetector {
  public:
   explicit DoorDetector(const DoorDetectionParams& params = {}) : params_(params) {
@@ -260,27 +282,8 @@ class DoorDetector {
         if (!used_[j]) pair_makes_door(i, j);
   }
 
-  /// Clears the cells swept by each door's leaf over its observed opening range (they are not
-  /// static), keeping the hinge cell occupied.
-  void remove_doors(OccupancyGrid& grid) const {
-    const double r = grid.resolution();
-    for (const auto& d : doors_) {
-      const double span = d.opening_max - d.opening_min;
-      const int steps = std::max(1, static_cast<int>(std::ceil(span * d.leaf_length / (r / 2))));
-      for (int k = 0; k <= steps; ++k) {
-        const double opening = d.opening_min + span * k / steps;
-        const Point2d end = d.leaf_end(opening);
-        // Half a cell beyond the leaf's end and to either side of it.
-        const Point2d u = (end - d.hinge).normalized(), n(-u.y(), u.x());
-        for (const double side : {-0.5, 0.0, 0.5})
-          grid.trace(d.hinge + n * (side * r), end + u * (r / 2) + n * (side * r),
-                     [&](const OccupancyGrid::Index& c) {
-                       if (grid.contains(c) && (grid.cell_center(c) - d.hinge).norm() > r)
-                         grid.set_log_odds(c, log_odds(grid.params().min_probability));
-                     });
-      }
-    }
-  }
+  /// Clears the cells swept by the detected doors from the static grid (remove_doors()).
+  void remove_doors(OccupancyGrid& grid) const { rangenav::remove_doors(grid, doors_); }
 
  private:
   /// Leaves i and j share `hinge`: a door if their lengths agree and their angles differ
