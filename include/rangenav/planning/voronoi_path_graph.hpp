@@ -197,13 +197,22 @@ class VoronoiPathGraph {
     stats_.diagram_vertices = vd.num_vertices();
     stats_.diagram_edges = vd.num_edges() / 2;
 
-    // Convex hull of the sites (grid units), Boost.Geometry's convex_hull.
+    // Convex hull of the sites (grid units) with Boost.Geometry's convex_hull (Graham / Andrew).
+    // A site lies on the hull iff its Voronoi cell is unbounded, so only the sites of infinite
+    // edges are handed in: the same hull, without sorting all n points a second time.
     hull_polygon hull;
     {
+      std::vector<std::uint8_t> on_hull(grid.size(), grid.size() < 3 ? 1 : 0);
+      for (std::size_t k = 0; k + 1 < vd.edges().size(); k += 2) {
+        const auto& e = vd.edges()[k];
+        if (e.is_infinite()) {
+          on_hull[e.cell()->source_index()] = 1;
+          on_hull[e.twin()->cell()->source_index()] = 1;
+        }
+      }
       bg::model::multi_point<hull_point> mp;
-      mp.reserve(grid.size());
-      for (const grid_point& g : grid)
-        mp.emplace_back(double(g[0]), double(g[1]));
+      for (std::size_t i = 0; i < grid.size(); ++i)
+        if (on_hull[i]) mp.emplace_back(double(grid[i][0]), double(grid[i][1]));
       bg::convex_hull(mp, hull);
     }
     hull_.clear();
