@@ -1,0 +1,286 @@
+#pragma once
+// Helpers shared by the PCD and PLY readers and writers: whole-file reads and writes, the
+// io_error message format, little-endian typed values, and text numbers that round-trip.
+
+#include <algorithm>
+#include <bit>
+#include <charconv>
+#include <cmath>
+#include <concepts>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <type_traits>
+#include <vector>
+
+#include "rangenav/core/error.hpp"
+#include "rangenav/io/line_reader.hpp"
+
+namespace rangenav::io {
+
+/// How a writer stores point and normal coordinates.
+enum class StoredScalar {
+  as_cloud,  ///< the cloud's own Scalar: lossless (float clouds as float32, double as float64)
+  float32,   ///< float32, what PCL's PointXYZ and most viewers expect
+  float64,   ///< float64
+};
+
+}  // namespace rangenav::io
+
+namespace rangenav::io::detail {
+
+/// Throws io_error("rangenav: <format>: <path>: line <line>: <message>"); line 0 omits the line.
+[[noreturn]] inline void throw_io(std::string_view format, const std::filesystem::path& path,
+                                  std::size_t line, std::string_view message) {
+  std::string msg = "rangenav: ";
+  msg.append(format).append(": ").append(path.string()).append(": ");
+  if (line != 0) msg.append("line ").append(std::to_string(line)).append(": ");
+  msg.append(message);
+  throw io_error(msg);
+}
+
+/// The whole file in one read (binary bodies are then decoded from memory).
+inline std::string read_whole_file(std::string_view format, const std::filesystem::path& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw_io(format, path, 0, "is a directory");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw_io(format, path, 0, "cannot open file for reading");
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0) throw_io(format, path, 0, "cannot read file");
+  in.seekg(0, std::ios::beg);
+  std::string bytes(static_cast<std::size_t>(size), '\0');
+  if (size > 0 && !in.read(bytes.data(), size)) throw_io(format, path, 0, "cannot read file");
+  return bytes;
+}
+
+inline void write_whole_file(std::string_view format, const std::filesystem::path& path,
+                             std::string_view bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) throw_io(format, path, 0, "cannot open file for writing");
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  out.flush();
+  if (!out) throw_io(format, path, 0, "cannot write file");
+}
+
+// ---- typed values ---------------------------------------------------------------------------
+
+/// The scalar types both formats use (PCD TYPE/SIZE pairs, PLY property types).
+enum class ValueType : std::uint8_t {
+  int8,
+  uint8,
+  int16,
+  uint16,
+  int32,
+  uint32,
+  int64,
+  uint64,
+  float32,
+  float64
+};
+
+constexpr std::size_t value_size(ValueType t) {
+  switch (t) {
+    case ValueType::int8:
+    case ValueType::uint8:
+      return 1;
+    case ValueType::int16:
+    case ValueType::uint16:
+      return 2;
+    case ValueType::int32:
+    case ValueType::uint32:
+    case ValueType::float32:
+      return 4;
+    case ValueType::int64:
+    case ValueType::uint64:
+    case ValueType::float64:
+      return 8;
+  }
+  return 0;
+}
+
+constexpr bool is_floating(ValueType t) {
+  return t == ValueType::float32 || t == ValueType::float64;
+}
+
+/// Reads a little-endian T from p (any alignment).
+template <class T>
+T load_le(const unsigned char* p) {
+  static_assert(std::is_arithmetic_v<T>);
+  unsigned char bytes[sizeof(T)];
+  std::memcpy(bytes, p, sizeof(T));
+  if constexpr (std::endian::native == std::endian::big) std::reverse(bytes, bytes + sizeof(T));
+  T value;
+  std::memcpy(&value, bytes, sizeof(T));
+  return value;
+}
+
+/// Writes v little-endian to p (any alignment).
+template <class T>
+void store_le(unsigned char* p, T v) {
+  static_assert(std::is_arithmetic_v<T>);
+  std::memcpy(p, &v, sizeof(T));
+  if constexpr (std::endian::native == std::endian::big) std::reverse(p, p + sizeof(T));
+}
+
+/// Appends v little-endian to out.
+template <class T>
+void append_le(std::string& out, T v) {
+  unsigned char bytes[sizeof(T)];
+  store_le(bytes, v);
+  out.append(reinterpret_cast<const char*>(bytes), sizeof(T));
+}
+
+/// The value of type t at p, converted to Out.
+template <class Out>
+Out load_as(const unsigned char* p, ValueType t) {
+  switch (t) {
+    case ValueType::int8:
+      return static_cast<Out>(static_cast<std::int8_t>(*p));
+    case ValueType::uint8:
+      return static_cast<Out>(*p);
+    case ValueType::int16:
+      return static_cast<Out>(load_le<std::int16_t>(p));
+    case ValueType::uint16:
+      return static_cast<Out>(load_le<std::uint16_t>(p));
+    case ValueType::int32:
+      return static_cast<Out>(load_le<std::int32_t>(p));
+    case ValueType::uint32:
+      return static_cast<Out>(load_le<std::uint32_t>(p));
+    case ValueType::int64:
+      return static_cast<Out>(load_le<std::int64_t>(p));
+    case ValueType::uint64:
+      return static_cast<Out>(load_le<std::uint64_t>(p));
+    case ValueType::float32:
+      return static_cast<Out>(load_le<float>(p));
+    case ValueType::float64:
+      return static_cast<Out>(load_le<double>(p));
+  }
+  return Out{};
+}
+
+/// An integer or floating-point value converted to 0..255 with saturation (NaN gives 0).
+template <class T>
+std::uint8_t saturate_u8(T v) {
+  if constexpr (std::is_floating_point_v<T>) {
+    if (!(v > T(0))) return 0;
+    if (v >= T(255)) return 255;
+    return static_cast<std::uint8_t>(std::lround(v));
+  } else {
+    if (v <= T(0)) return 0;
+    if (v >= T(255)) return 255;
+    return static_cast<std::uint8_t>(v);
+  }
+}
+
+/// The value of type t at p as a colour channel (saturated to 0..255).
+inline std::uint8_t load_channel(const unsigned char* p, ValueType t) {
+  if (t == ValueType::uint8) return *p;
+  if (is_floating(t)) return saturate_u8(load_as<double>(p, t));
+  if (t == ValueType::uint64) return saturate_u8(load_le<std::uint64_t>(p));
+  return saturate_u8(load_as<std::int64_t>(p, t));
+}
+
+// ---- text -----------------------------------------------------------------------------------
+
+/// Walks a buffer line by line, counting 1-based line numbers.
+class LineCursor {
+ public:
+  explicit LineCursor(std::string_view text, std::size_t pos = 0, std::size_t line = 0)
+      : text_(text), pos_(pos), line_(line) {}
+
+  /// The next line without its '\n' (and '\r'); false at the end of the buffer.
+  bool next(std::string_view& line) {
+    if (pos_ >= text_.size()) return false;
+    const std::size_t end = text_.find('\n', pos_);
+    const std::size_t stop = end == std::string_view::npos ? text_.size() : end;
+    line = text_.substr(pos_, stop - pos_);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    pos_ = end == std::string_view::npos ? text_.size() : end + 1;
+    ++line_;
+    return true;
+  }
+  [[nodiscard]] std::size_t line() const { return line_; }     ///< number of the last line read
+  [[nodiscard]] std::size_t position() const { return pos_; }  ///< offset after the last line
+
+ private:
+  std::string_view text_;
+  std::size_t pos_;
+  std::size_t line_;
+};
+
+/// Parses the whole token as T (integers in base 10, floating point in any std::from_chars form
+/// including nan and inf); a leading '+' is accepted. False when the token is not such a number
+/// or is out of T's range.
+template <class T>
+bool parse_number(std::string_view token, T& value) {
+  if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+  if (token.empty()) return false;
+  const char* end = token.data() + token.size();
+  const auto [ptr, ec] = std::from_chars(token.data(), end, value);
+  return ec == std::errc{} && ptr == end;
+}
+
+/// Parses a token of declared type t and converts it to Out (float tokens are parsed at the
+/// declared precision first, so ascii and binary files of the same data read the same values).
+template <class Out>
+bool parse_as(std::string_view token, ValueType t, Out& out) {
+  switch (t) {
+    case ValueType::float32: {
+      float v;
+      if (!parse_number(token, v)) return false;
+      out = static_cast<Out>(v);
+      return true;
+    }
+    case ValueType::float64: {
+      double v;
+      if (!parse_number(token, v)) return false;
+      out = static_cast<Out>(v);
+      return true;
+    }
+    case ValueType::uint8:
+    case ValueType::uint16:
+    case ValueType::uint32:
+    case ValueType::uint64: {
+      std::uint64_t v;
+      if (!parse_number(token, v)) return false;
+      if (value_size(t) < 8 && v >> (8 * value_size(t)) != 0) return false;
+      out = static_cast<Out>(v);
+      return true;
+    }
+    default: {
+      std::int64_t v;
+      if (!parse_number(token, v)) return false;
+      const std::int64_t bound = value_size(t) < 8 ? std::int64_t{1} << (8 * value_size(t) - 1) : 0;
+      if (bound != 0 && (v < -bound || v >= bound)) return false;
+      out = static_cast<Out>(v);
+      return true;
+    }
+  }
+}
+
+/// Appends the shortest text that parses back to exactly v ("nan", "-nan", "inf" for those).
+template <class T>
+void append_number(std::string& out, T v) {
+  char buffer[64];
+  const auto [ptr, ec] = std::to_chars(buffer, buffer + sizeof(buffer), v);
+  out.append(buffer, ec == std::errc{} ? ptr : buffer);
+}
+
+/// Quotes a token for an error message, shortened if long.
+inline std::string quote_token(std::string_view token) {
+  std::string s = "'";
+  if (token.size() > 40) {
+    s.append(token.substr(0, 37)).append("...");
+  } else {
+    s.append(token);
+  }
+  return s + "'";
+}
+
+}  // namespace rangenav::io::detail
