@@ -4,6 +4,11 @@
 // complete.
 
 // clang-format off
+#include "rangenav/control/indiveri_path_tracker.hpp"
+#include "rangenav/control/indiveri_pose_controller.hpp"
+#include "rangenav/control/local_frame_path.hpp"
+#include "rangenav/control/motor_control.hpp"
+#include "rangenav/control/reactive.hpp"
 #include "rangenav/core/angles.hpp"
 #include "rangenav/core/cloud.hpp"
 #include "rangenav/core/error.hpp"
