@@ -294,6 +294,8 @@ TEST_CASE("CarmenReader rejects bad options with exact messages", "[io][carmen]"
   CHECK_THROWS_WITH(CarmenReader(path, {.range_min = -1.0}),
                     "rangenav: CarmenReader: argument 'options.range_min' = -1 must be finite "
                     "and >= 0");
+  // The options are checked before the file is opened.
+  CHECK_THROWS_AS(CarmenReader(dir.path() / "missing.clf", {.range_max = -1.0}), invalid_argument);
 }
 
 TEST_CASE("CarmenReader: empty and comment-only files give no records", "[io][carmen]") {

@@ -99,22 +99,10 @@ class CarmenReader {
   /// The maximum range when neither the options nor the log say otherwise (m).
   static constexpr double default_range_max = 81.9;
 
-  /// Opens the log. Throws io_error when it cannot be opened (or is gzip without zlib) and
-  /// invalid_argument for bad options.
+  /// Opens the log. Throws invalid_argument for bad options (checked first) and io_error when
+  /// the file cannot be opened (or is gzip-compressed and zlib is missing).
   explicit CarmenReader(const std::filesystem::path& path, CarmenReaderOptions options = {})
-      : options_(options), lines_(path, "carmen") {
-    ::rangenav::detail::require_non_negative("CarmenReader", "options.range_min",
-                                             options_.range_min);
-    if (options_.range_max) {
-      ::rangenav::detail::require_positive("CarmenReader", "options.range_max",
-                                           *options_.range_max);
-      if (!(*options_.range_max > options_.range_min))
-        ::rangenav::detail::throw_invalid_argument(
-            "CarmenReader", "options.range_max", *options_.range_max,
-            "must exceed options.range_min = " +
-                ::rangenav::detail::format_value(options_.range_min));
-    }
-  }
+      : options_(validated(options)), lines_(path, "carmen") {}
 
   /// The next laser or odometry record, or nullopt at the end of the file.
   std::optional<CarmenRecord> next() {
@@ -143,6 +131,20 @@ class CarmenReader {
   [[nodiscard]] const std::filesystem::path& path() const { return lines_.path(); }
 
  private:
+  static CarmenReaderOptions validated(const CarmenReaderOptions& options) {
+    ::rangenav::detail::require_non_negative("CarmenReader", "options.range_min",
+                                             options.range_min);
+    if (options.range_max) {
+      ::rangenav::detail::require_positive("CarmenReader", "options.range_max", *options.range_max);
+      if (!(*options.range_max > options.range_min))
+        ::rangenav::detail::throw_invalid_argument(
+            "CarmenReader", "options.range_max", *options.range_max,
+            "must exceed options.range_min = " +
+                ::rangenav::detail::format_value(options.range_min));
+    }
+    return options;
+  }
+
   [[noreturn]] void fail(std::string_view message) const {
     lines_.fail_line(std::string(tokens_[0]) + ": " + std::string(message));
   }

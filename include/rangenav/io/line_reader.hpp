@@ -221,15 +221,21 @@ inline bool parse_count(std::string_view token, std::size_t& value) {
 }
 
 /// Appends `value` in fixed notation with `precision` decimals (locale-independent, like
-/// printf("%.*f")).
+/// printf("%.*f"), except that no "-0.000" is printed).
 inline void append_fixed(std::string& out, double value, int precision) {
   char buffer[400];
   const auto [end, ec] =
       std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::fixed, precision);
-  if (ec == std::errc())
-    out.append(buffer, end);
-  else
+  if (ec != std::errc()) {
     out.append(std::to_string(value));
+    return;
+  }
+  // A negative value that rounds to zero prints as "0.000", not "-0.000".
+  const char* first = buffer;
+  if (*first == '-' && std::string_view(first + 1, static_cast<std::size_t>(end - first - 1))
+                               .find_first_not_of("0.") == std::string_view::npos)
+    ++first;
+  out.append(first, static_cast<std::size_t>(end - first));
 }
 
 }  // namespace detail

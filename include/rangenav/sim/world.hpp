@@ -112,6 +112,16 @@ struct RayHit {
   [[nodiscard]] bool hit() const { return kind != SurfaceKind::none; }
 };
 
+/// A primitive of a World: its kind (wall, box, cylinder, door, hole) and index.
+struct PrimitiveRef {
+  SurfaceKind kind{SurfaceKind::none};
+  std::uint32_t index{0};
+  friend bool operator==(const PrimitiveRef&, const PrimitiveRef&) = default;
+  friend bool operator<(const PrimitiveRef& a, const PrimitiveRef& b) {
+    return a.kind != b.kind ? a.kind < b.kind : a.index < b.index;
+  }
+};
+
 class World {
  public:
   // ---- building ----------------------------------------------------------------------------
@@ -331,6 +341,41 @@ class World {
     floor_and_ceiling(origin, direction, best);
     for_each_item([&](std::uint32_t item) { test_item_3d(item, origin, direction, best); });
     return finish(best);
+  }
+
+  /// The walls, boxes, cylinders and doors whose 2D bounds (a door's: its sweep) may overlap the
+  /// axis-aligned box [lo, hi], each once, sorted; then the holes that overlap it. A superset:
+  /// callers test the exact shapes.
+  void primitives_near(const Point2d& lo, const Point2d& hi, std::vector<PrimitiveRef>& out) const {
+    out.clear();
+    const auto overlaps = [&](const Point2d& a, const Point2d& b) {
+      return a.x() <= hi.x() && b.x() >= lo.x() && a.y() <= hi.y() && b.y() >= lo.y();
+    };
+    const auto push = [&](std::uint32_t item) {
+      constexpr SurfaceKind kinds[] = {SurfaceKind::wall, SurfaceKind::box, SurfaceKind::cylinder,
+                                       SurfaceKind::door};
+      out.push_back({kinds[kind_of(item)], index_of(item)});
+    };
+    if (!index_built_ || nx_ == 0) {
+      for_each_bounds([&](std::uint32_t item, const Point2d& a, const Point2d& b) {
+        if (overlaps(a, b)) push(item);
+      });
+    } else {
+      const auto [x0, y0] = cell_of(lo);
+      const auto [x1, y1] = cell_of(hi);
+      for (std::size_t iy = y0; iy <= y1; ++iy)
+        for (std::size_t ix = x0; ix <= x1; ++ix) {
+          const std::size_t c = iy * nx_ + ix;
+          for (std::uint32_t k = cell_offsets_[c]; k < cell_offsets_[c + 1]; ++k)
+            push(cell_items_[k]);
+        }
+      std::sort(out.begin(), out.end());
+      out.erase(std::unique(out.begin(), out.end()), out.end());
+    }
+    for (std::size_t i = 0; i < hole_cache_.size(); ++i)
+      if (overlaps(hole_cache_[i].center - hole_cache_[i].bound_half,
+                   hole_cache_[i].center + hole_cache_[i].bound_half))
+        out.push_back({SurfaceKind::hole, static_cast<std::uint32_t>(i)});
   }
 
   /// The floor height at p: 0, or minus the depth of the deepest hole containing p.

@@ -1,0 +1,488 @@
+#pragma once
+// Egocentric virtual 2D maps (3D-perception paper 002 §4): a vector of N = Θ / Δθ bearing bins
+// around the robot, each holding one point in polar (range, bearing) and Cartesian (x, y)
+// coordinates plus its height z (a 2.5D representation, §4.4.3) and an age counter. Which of two
+// readings in one bin is kept is the map's policy: an obstacle map keeps the nearest reading
+// inside the virtual corridor (§4.2), a structure map the farthest (§4.3).
+//
+// Empty bins hold dummy points (§4.4): max range for obstacle maps, 0 m for structure maps; as a
+// LaserScan those are invalid readings that every scan algorithm ignores, so ICP, Monte-Carlo
+// localization or free-space steering run on a virtual map unchanged (to_laser_scan()). The map
+// itself models the 2D PointCloud concept over its non-dummy points, in bin order.
+//
+// The update procedure of §4.4 with a pose shift and new readings:
+//   1. transformation of every stored point by the pose shift (Eq. 4), keeping the polar
+//      coordinates in step; two points falling into one bin are resolved by the policy;
+//   2. removal of points transformed more than max_age times (§4.4.2);
+//   3. replacement of stored points by the new readings per the policy (§4.4.3).
+// Steps 1 and 2 are skipped when the robot did not move. Steps 1-2 run in one pass into a second
+// bin buffer that is then swapped in, so an update allocates nothing.
+
+#include <algorithm>
+#include <cmath>
+#include <concepts>
+#include <cstddef>
+#include <cstdint>
+#include <numbers>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "rangenav/core/angles.hpp"
+#include "rangenav/core/error.hpp"
+#include "rangenav/core/point_cloud.hpp"
+#include "rangenav/core/types.hpp"
+#include "rangenav/scan/laser_scan.hpp"
+
+namespace rangenav {
+
+namespace detail {
+
+/// atan2(y, x) in (-pi, pi] with an absolute error below 1e-10 rad (double), about twice as fast
+/// as the C library's: octant reduction to t = min/max in [0, 1], then
+/// atan(t) = pi/6 + atan((sqrt(3) t - 1) / (sqrt(3) + t)) for t > tan(15 deg) so that the
+/// argument stays within |t| <= tan(15 deg), where the Taylor series to t^15 is accurate to
+/// t^17 / 17 < 1.1e-11. atan2(0, 0) is 0.
+template <std::floating_point S>
+[[nodiscard]] inline S fast_atan2(S y, S x) {
+  constexpr S pi = std::numbers::pi_v<S>;
+  constexpr S sqrt3 = std::numbers::sqrt3_v<S>;
+  constexpr S tan15 = S(0.26794919243112270647);
+  const S ax = std::abs(x), ay = std::abs(y);
+  const S hi = std::max(ax, ay), lo = std::min(ax, ay);
+  if (!(hi > S(0))) return S(0);
+  S t = lo / hi;
+  S a = S(0);
+  if (t > tan15) {
+    t = (sqrt3 * t - S(1)) / (sqrt3 + t);
+    a = pi / 6;
+  }
+  const S t2 = t * t;
+  S p = S(-1) / S(15);
+  p = p * t2 + S(1) / S(13);
+  p = p * t2 - S(1) / S(11);
+  p = p * t2 + S(1) / S(9);
+  p = p * t2 - S(1) / S(7);
+  p = p * t2 + S(1) / S(5);
+  p = p * t2 - S(1) / S(3);
+  p = p * t2 + S(1);
+  a += t * p;
+  if (ay > ax) a = pi / 2 - a;
+  if (x < S(0)) a = pi - a;
+  return y < S(0) ? -a : a;
+}
+
+/// The bearing of q + t given the bearing of q (|q| = q_range > 0): the angle between q and
+/// q + t is atan(r) with r = (q x t) / (|q|^2 + q . t); for |r| <= 0.1 the series to r^9 is
+/// accurate to 1e-12, otherwise (large shifts, near the origin) the full fast_atan2 is used.
+/// Keeping the polar coordinates in step this way is what §4.4.1 asks for, and cheaper than
+/// recomputing them.
+template <std::floating_point S>
+[[nodiscard]] inline S shifted_bearing(S qx, S qy, S q_range, S q_bearing, S tx, S ty) {
+  const S den = q_range * q_range + qx * tx + qy * ty;
+  const S num = qx * ty - qy * tx;
+  if (den > S(0) && std::abs(num) <= S(0.1) * den) {
+    const S r = num / den, r2 = r * r;
+    const S atan_r =
+        r * (S(1) + r2 * (S(-1) / 3 + r2 * (S(1) / 5 + r2 * (S(-1) / 7 + r2 * (S(1) / 9)))));
+    S b = q_bearing + atan_r;
+    if (b > std::numbers::pi_v<S>) b -= 2 * std::numbers::pi_v<S>;
+    if (b <= -std::numbers::pi_v<S>) b += 2 * std::numbers::pi_v<S>;
+    return b;
+  }
+  return fast_atan2(qy + ty, qx + tx);
+}
+
+}  // namespace detail
+
+/// One bin of a virtual map: a point in robot coordinates with its polar coordinates, height and
+/// the number of transformations (pose shifts) it has seen since it was measured.
+template <std::floating_point Scalar = double>
+struct VirtualMapPoint {
+  Scalar x{0};        ///< m, robot frame
+  Scalar y{0};        ///< m, robot frame
+  Scalar z{0};        ///< m, height above the floor (2.5D)
+  Scalar range{0};    ///< m, sqrt(x^2 + y^2)
+  Scalar bearing{0};  ///< rad, atan2(y, x) in (-pi, pi]
+  std::uint32_t age{0};
+  bool dummy{true};  ///< an empty bin (range = the policy's dummy range)
+
+  [[nodiscard]] Point<2, Scalar> xy() const { return {x, y}; }
+  [[nodiscard]] Point<3, Scalar> xyz() const { return {x, y, z}; }
+};
+
+/// A virtual-map policy decides which readings are admitted (`admits(range, z, max_range)`),
+/// which of two readings in one bin is kept (`prefers(candidate_range, kept_range)`: true when
+/// the candidate replaces the kept point) and the range of the dummy points of empty bins
+/// (`dummy_range(max_range)`).
+template <class P, class Scalar = double>
+concept VirtualMapPolicy = std::floating_point<Scalar> && requires(const P& policy, Scalar value) {
+  { policy.admits(value, value, value) } -> std::convertible_to<bool>;
+  { policy.prefers(value, value) } -> std::convertible_to<bool>;
+  { policy.dummy_range(value) } -> std::convertible_to<Scalar>;
+};
+
+/// Obstacle map (§4.2): keeps the nearest reading per bearing, admitting only readings whose
+/// height lies in the virtual corridor [z_min, z_max], the robot's height band. A reading at
+/// equal distance replaces the stored one (§4.4.3: "less than or equal"), so the newest wins.
+/// Floor points must be removed before insertion (egocentric/floor.hpp): with z_min = 0 the
+/// corridor itself admits artificial obstacles placed on the floor plane (descending stairs).
+struct ObstacleMapPolicy {
+  double z_min{0.0};  ///< m, lower bound of the virtual corridor
+  double z_max{1.0};  ///< m, upper bound of the virtual corridor (the robot's height)
+
+  template <std::floating_point S>
+  [[nodiscard]] bool admits(S range, S z, S max_range) const {
+    return range < max_range && z >= static_cast<S>(z_min) && z <= static_cast<S>(z_max);
+  }
+  template <std::floating_point S>
+  [[nodiscard]] bool prefers(S candidate, S kept) const {
+    return candidate <= kept;
+  }
+  template <std::floating_point S>
+  [[nodiscard]] S dummy_range(S max_range) const {
+    return max_range;
+  }
+};
+
+/// Structure map (§4.3): keeps the farthest reading per bearing at any height, so objects that do
+/// not span the whole area of interest are overwritten by the walls behind them; max-range
+/// readings are ignored, as they would replace valid ones.
+struct StructureMapPolicy {
+  template <std::floating_point S>
+  [[nodiscard]] bool admits(S range, S /*z*/, S max_range) const {
+    return range < max_range;
+  }
+  template <std::floating_point S>
+  [[nodiscard]] bool prefers(S candidate, S kept) const {
+    return candidate >= kept;
+  }
+  template <std::floating_point S>
+  [[nodiscard]] S dummy_range(S /*max_range*/) const {
+    return S(0);
+  }
+};
+
+static_assert(VirtualMapPolicy<ObstacleMapPolicy, double>);
+static_assert(VirtualMapPolicy<StructureMapPolicy, float>);
+
+/// Layout and ageing of a virtual map.
+template <std::floating_point Scalar = double>
+struct VirtualMapParams {
+  /// Θ, rad, in (0, 2 pi]; the bins span [-Θ/2, Θ/2) around the robot's heading.
+  Scalar aperture{2 * std::numbers::pi_v<Scalar>};
+  /// Δθ, rad; N = round(Θ / Δθ) bins, each Θ / N wide (0.5 deg: 720 bins over 360 deg).
+  Scalar resolution{std::numbers::pi_v<Scalar> / 360};
+  /// m; readings at or beyond are ignored, and it is the obstacle map's dummy range.
+  Scalar max_range{30};
+  /// A point transformed more than this many times becomes a dummy (§4.4.2: 500, about 5 s with
+  /// the pitching scanner's 75 Hz).
+  std::uint32_t max_age{500};
+
+  void validate(std::string_view where = "VirtualMapParams") const {
+    detail::require_positive(where, "aperture", aperture);
+    if (aperture > 2 * std::numbers::pi_v<Scalar> * (1 + 1e-9))
+      detail::throw_invalid_argument(where, "aperture", aperture, "must be <= 2 pi");
+    detail::require_positive(where, "resolution", resolution);
+    if (resolution > aperture)
+      detail::throw_invalid_argument(
+          where, "resolution", resolution,
+          "must not exceed the aperture " + detail::format_value(aperture));
+    detail::require_positive(where, "max_range", max_range);
+  }
+};
+
+/// A planar sensor mounting: the sensor's pose in the robot frame and the height of its
+/// measurement plane above the floor.
+template <std::floating_point Scalar = double>
+struct PlanarMount {
+  Pose2<Scalar> pose{};
+  Scalar height{0};
+};
+
+/// What one call of the update procedure did.
+struct VirtualMapUpdateStats {
+  std::size_t moved{0};     ///< points carried over by the transformation (step 1)
+  std::size_t merged{0};    ///< points lost to a bin collision or leaving the aperture (step 1)
+  std::size_t aged_out{0};  ///< points removed by age (step 2)
+  std::size_t replaced{0};  ///< bins written by new readings (step 3)
+};
+
+template <class Policy, std::floating_point Scalar = double>
+requires VirtualMapPolicy<Policy, Scalar>
+class VirtualMap {
+ public:
+  using scalar_type = Scalar;
+  using point_type = Point<2, Scalar>;
+  using bin_type = VirtualMapPoint<Scalar>;
+  using policy_type = Policy;
+
+  /// The policy's parameters may be changed between updates (e.g. the virtual corridor adapted to
+  /// the robot's velocity).
+  Policy policy{};
+
+  explicit VirtualMap(const VirtualMapParams<Scalar>& params = {}, Policy map_policy = {})
+      : policy(std::move(map_policy)), params_(params) {
+    params_.validate("VirtualMap");
+    const auto n = static_cast<std::size_t>(std::llround(params_.aperture / params_.resolution));
+    bin_count_ = std::max<std::size_t>(n, 1);
+    resolution_ = params_.aperture / static_cast<Scalar>(bin_count_);
+    inv_resolution_ = Scalar(1) / resolution_;
+    angle_min_ = -params_.aperture / 2;
+    full_circle_ = std::abs(params_.aperture - 2 * std::numbers::pi_v<Scalar>) < resolution_ / 2;
+    bins_.resize(bin_count_);
+    scratch_.resize(bin_count_);
+    valid_points_.reserve(bin_count_);
+    valid_indices_.reserve(bin_count_);
+    clear();
+  }
+
+  [[nodiscard]] const VirtualMapParams<Scalar>& params() const { return params_; }
+  /// N, the number of bins.
+  [[nodiscard]] std::size_t size() const { return bin_count_; }
+  /// Θ / N, the width of a bin (rad).
+  [[nodiscard]] Scalar resolution() const { return resolution_; }
+  [[nodiscard]] Scalar angle_min() const { return angle_min_; }
+  [[nodiscard]] Scalar max_range() const { return params_.max_range; }
+  [[nodiscard]] std::uint32_t max_age() const { return params_.max_age; }
+  /// The dummy range of this map's policy.
+  [[nodiscard]] Scalar dummy_range() const { return policy.dummy_range(params_.max_range); }
+
+  /// Changes the age threshold of §4.4.2 (takes effect at the next transformation).
+  void set_max_age(std::uint32_t max_age) { params_.max_age = max_age; }
+
+  [[nodiscard]] std::span<const bin_type> bins() const { return bins_; }
+  [[nodiscard]] const bin_type& bin(std::size_t i) const { return bins_[i]; }
+  /// Bearing of the centre of bin i.
+  [[nodiscard]] Scalar bin_bearing(std::size_t i) const {
+    return angle_min_ + (static_cast<Scalar>(i) + Scalar(0.5)) * resolution_;
+  }
+  /// The bin of a bearing, or size() when the bearing lies outside the aperture.
+  [[nodiscard]] std::size_t bin_index(Scalar bearing) const {
+    const Scalar f = (normalize_angle(bearing) - angle_min_) * inv_resolution_;
+    return index_of(f);
+  }
+
+  /// Non-dummy points, in bin order (the PointCloud view).
+  [[nodiscard]] const std::vector<point_type>& valid_points() const { return valid_points_; }
+  /// Bins holding a non-dummy point, increasing.
+  [[nodiscard]] const std::vector<std::uint32_t>& valid_indices() const { return valid_indices_; }
+  [[nodiscard]] std::size_t valid_count() const { return valid_indices_.size(); }
+
+  /// Fills every bin with a dummy point.
+  void clear() {
+    const Scalar d = dummy_range();
+    for (std::size_t i = 0; i < bin_count_; ++i) {
+      const Scalar b = bin_bearing(i);
+      bins_[i] = bin_type{d * std::cos(b), d * std::sin(b), Scalar(0), d, b, 0, true};
+    }
+    dummies_ = bins_;
+    refresh();
+  }
+
+  /// Steps 1 and 2 of §4.4: the robot moved by `motion` (its new pose in its previous frame, e.g.
+  /// relative(previous_odometry, odometry)); every stored point p becomes motion^-1 * p, which is
+  /// Eq. (4) with Δθ = -motion.theta and (Δx, Δy) = -R(Δθ) (motion.x, motion.y). Points whose
+  /// count of transformations exceeds max_age become dummies. Nothing happens when the motion is
+  /// exactly zero (the robot did not move).
+  VirtualMapUpdateStats transform(const Pose2<Scalar>& motion) {
+    VirtualMapUpdateStats stats = transform_bins(motion);
+    refresh();
+    return stats;
+  }
+
+  /// Step 3 of §4.4 for 3D readings in the robot frame (x, y, and z = height above the floor):
+  /// each reading admitted by the policy replaces the point in its bin when the policy prefers it.
+  /// Non-finite points are skipped. Returns the number of bins written.
+  template <PointCloudOf<3> C>
+  std::size_t insert(const C& readings) {
+    const std::size_t written = insert_bins(readings);
+    refresh();
+    return written;
+  }
+
+  /// Step 3 of §4.4 for a 2D scan from a planar sensor mounted at `mount` (its valid readings
+  /// only; the scan's range_max and the map's max_range both limit them).
+  std::size_t insert(const LaserScan<Scalar>& scan, const PlanarMount<Scalar>& mount = {}) {
+    const std::size_t written = insert_bins(scan, mount);
+    refresh();
+    return written;
+  }
+
+  /// The whole procedure of §4.4: transform by `motion` (skipped when zero), age out, insert.
+  template <class Readings>
+  VirtualMapUpdateStats update(const Pose2<Scalar>& motion, const Readings& readings) {
+    VirtualMapUpdateStats stats = transform_bins(motion);
+    stats.replaced = insert_bins(readings);
+    refresh();
+    return stats;
+  }
+  VirtualMapUpdateStats update(const Pose2<Scalar>& motion, const LaserScan<Scalar>& scan,
+                               const PlanarMount<Scalar>& mount) {
+    VirtualMapUpdateStats stats = transform_bins(motion);
+    stats.replaced = insert_bins(scan, mount);
+    refresh();
+    return stats;
+  }
+
+  /// The map as a laser scan with one beam per bin at the bin's centre bearing; dummy bins carry
+  /// the dummy range (max range or 0), which the scan flags invalid. A stored point's bearing is
+  /// rounded to its bin centre (at most Δθ/2); use bins() for the exact coordinates.
+  [[nodiscard]] LaserScan<Scalar> to_laser_scan(double timestamp = 0.0) const {
+    std::vector<Scalar> ranges(bin_count_);
+    for (std::size_t i = 0; i < bin_count_; ++i)
+      ranges[i] = bins_[i].range;
+    ScanGeometry<Scalar> g{angle_min_ + resolution_ / 2, resolution_, bin_count_, Scalar(0),
+                           params_.max_range};
+    return LaserScan<Scalar>(g, std::move(ranges), {}, timestamp);
+  }
+
+ private:
+  VirtualMapUpdateStats transform_bins(const Pose2<Scalar>& motion) {
+    VirtualMapUpdateStats stats;
+    if (motion.x == Scalar(0) && motion.y == Scalar(0) && motion.theta == Scalar(0)) return stats;
+    const Scalar dtheta = -motion.theta;
+    const Scalar c = std::cos(dtheta), s = std::sin(dtheta);
+    const Scalar tx = -(c * motion.x - s * motion.y), ty = -(s * motion.x + c * motion.y);
+    const Scalar max_range = params_.max_range;
+    const std::uint32_t max_age = params_.max_age;
+    std::copy(dummies_.begin(), dummies_.end(), scratch_.begin());
+    for (const std::uint32_t i : valid_indices_) {
+      const bin_type& b = bins_[i];
+      if (b.age >= max_age) {  // would exceed max_age with this transformation (step 2)
+        ++stats.aged_out;
+        continue;
+      }
+      // Eq. (4), with the polar coordinates carried along (§4.4.1).
+      const Scalar qx = c * b.x - s * b.y, qy = s * b.x + c * b.y;
+      const Scalar x = qx + tx, y = qy + ty;
+      const Scalar range = std::sqrt(x * x + y * y);
+      const Scalar bearing =
+          detail::shifted_bearing(qx, qy, b.range, normalize_rotated(b.bearing + dtheta), tx, ty);
+      const std::size_t k = index_of((bearing - angle_min_) * inv_resolution_);
+      if (k == bin_count_ || !policy.admits(range, b.z, max_range)) {
+        ++stats.merged;
+        continue;
+      }
+      bin_type& dst = scratch_[k];
+      if (!dst.dummy) {
+        ++stats.merged;
+        if (!policy.prefers(range, dst.range)) continue;
+      } else {
+        ++stats.moved;
+      }
+      dst.x = x;
+      dst.y = y;
+      dst.z = b.z;
+      dst.range = range;
+      dst.bearing = bearing;
+      dst.age = b.age + 1;
+      dst.dummy = false;
+    }
+    std::swap(bins_, scratch_);
+    return stats;
+  }
+
+  template <PointCloudOf<3> C>
+  std::size_t insert_bins(const C& readings) {
+    const std::size_t n = traits::size(readings);
+    std::size_t written = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Point<3, Scalar> p = traits::point(readings, i).template cast<Scalar>();
+      written += insert_one(p.x(), p.y(), p.z());
+    }
+    return written;
+  }
+
+  std::size_t insert_bins(const LaserScan<Scalar>& scan, const PlanarMount<Scalar>& mount = {}) {
+    std::size_t written = 0;
+    const Pose2<Scalar>& m = mount.pose;
+    const Scalar c = std::cos(m.theta), s = std::sin(m.theta);
+    const Scalar max_range = params_.max_range;
+    for (const std::uint32_t i : scan.valid_indices()) {
+      const point_type& p = scan.point(i);
+      const Scalar qx = c * p.x() - s * p.y(), qy = s * p.x() + c * p.y();
+      const Scalar x = qx + m.x, y = qy + m.y;
+      const Scalar range = std::sqrt(x * x + y * y);
+      if (!(range > Scalar(0)) || !policy.admits(range, mount.height, max_range)) continue;
+      // The scan's bearings are known: shift them by the mounting instead of an atan2 per beam.
+      const Scalar bearing = detail::shifted_bearing(
+          qx, qy, scan.range(i), normalize_rotated(scan.angle(i) + m.theta), m.x, m.y);
+      written += place(x, y, mount.height, range, bearing);
+    }
+    return written;
+  }
+
+  static Scalar normalize_rotated(Scalar a) {
+    constexpr Scalar pi = std::numbers::pi_v<Scalar>;
+    if (a > pi) return a - 2 * pi;
+    if (a <= -pi) return a + 2 * pi;
+    return a;
+  }
+
+  std::size_t index_of(Scalar f) const {
+    if (!(f >= Scalar(0))) return full_circle_ && f > Scalar(-1) ? 0 : bin_count_;
+    auto k = static_cast<std::size_t>(f);
+    if (k >= bin_count_) k = full_circle_ ? k - bin_count_ : bin_count_;
+    return k < bin_count_ ? k : bin_count_;
+  }
+
+  std::size_t insert_one(Scalar x, Scalar y, Scalar z) {
+    if (!(std::isfinite(x) && std::isfinite(y) && std::isfinite(z))) return 0;
+    const Scalar r = std::sqrt(x * x + y * y);
+    if (!(r > Scalar(0)) || !policy.admits(r, z, params_.max_range)) return 0;
+    return place(x, y, z, r, detail::fast_atan2(y, x));
+  }
+
+  std::size_t place(Scalar x, Scalar y, Scalar z, Scalar r, Scalar bearing) {
+    const std::size_t k = index_of((bearing - angle_min_) * inv_resolution_);
+    if (k == bin_count_) return 0;
+    bin_type& dst = bins_[k];
+    if (!dst.dummy && !policy.prefers(r, dst.range)) return 0;
+    dst = bin_type{x, y, z, r, bearing, 0, false};
+    return 1;
+  }
+
+  void refresh() {  // within the reserved capacity: no allocation
+    valid_points_.resize(bin_count_);
+    valid_indices_.resize(bin_count_);
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < bin_count_; ++i) {
+      const bin_type& b = bins_[i];
+      valid_indices_[n] = static_cast<std::uint32_t>(i);
+      valid_points_[n] = point_type(b.x, b.y);
+      n += b.dummy ? 0 : 1;
+    }
+    valid_points_.resize(n);
+    valid_indices_.resize(n);
+  }
+
+  VirtualMapParams<Scalar> params_;
+  std::size_t bin_count_{0};
+  Scalar resolution_{0}, inv_resolution_{0}, angle_min_{0};
+  bool full_circle_{false};
+  std::vector<bin_type> bins_, scratch_, dummies_;
+  std::vector<point_type> valid_points_;
+  std::vector<std::uint32_t> valid_indices_;
+};
+
+/// The two map types of §4.
+template <std::floating_point Scalar = double>
+using ObstacleMap = VirtualMap<ObstacleMapPolicy, Scalar>;
+template <std::floating_point Scalar = double>
+using StructureMap = VirtualMap<StructureMapPolicy, Scalar>;
+
+namespace traits {
+/// A virtual map is a 2D PointCloud of its non-dummy points.
+template <class P, class S>
+struct cloud_access<VirtualMap<P, S>> {
+  static constexpr int dimension = 2;
+  using Scalar = S;
+  static std::size_t size(const VirtualMap<P, S>& m) { return m.valid_count(); }
+  static const Point<2, S>& point(const VirtualMap<P, S>& m, std::size_t i) {
+    return m.valid_points()[i];
+  }
+};
+}  // namespace traits
+
+}  // namespace rangenav

@@ -1,0 +1,326 @@
+#pragma once
+// Trajectory files: timestamped poses, one per line, as SLAM evaluation tools read them.
+//
+//   TUM      "t tx ty tz qx qy qz qw"  (the TUM RGB-D benchmark format; evo, rpg tools)
+//   xytheta  "t x y theta"             (planar poses, e.g. for the Freiburg SLAM benchmark)
+//
+// Writers print timestamps with microsecond precision ("%.6f") and the pose fields with 9
+// decimals, locale-independent; a planar pose goes to TUM with z = 0 and a rotation about z.
+// Readers skip blank lines and '#' comments, read plain or gzip files (see LineReader), normalise
+// quaternions and angles, and raise io_error naming the file and line for a malformed line.
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstddef>
+#include <filesystem>
+#include <fstream>
+#include <istream>
+#include <ostream>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rangenav/core/angles.hpp"
+#include "rangenav/core/error.hpp"
+#include "rangenav/core/types.hpp"
+#include "rangenav/io/line_reader.hpp"
+
+namespace rangenav::io {
+
+/// A planar pose with its timestamp (s).
+struct StampedPose2d {
+  double timestamp{0.0};
+  Pose2d pose;
+};
+
+/// A 3D rigid transform with its timestamp (s).
+struct StampedTransform3d {
+  double timestamp{0.0};
+  Transform3d pose{Transform3d::Identity()};
+};
+
+namespace detail {
+
+inline constexpr int trajectory_time_decimals = 6;
+inline constexpr int trajectory_pose_decimals = 9;
+
+inline void check_trajectory_sizes(std::string_view where, std::size_t timestamps,
+                                   std::size_t poses) {
+  if (timestamps != poses)
+    ::rangenav::detail::throw_invalid_argument(
+        where, "poses.size()", poses,
+        "must equal timestamps.size() = " + std::to_string(timestamps));
+}
+
+inline void require_finite_entry(std::string_view where, std::size_t index, bool finite) {
+  if (!finite)
+    ::rangenav::detail::throw_invalid_argument(where, "index", index,
+                                               "holds a non-finite timestamp or pose");
+}
+
+inline void append_tum_line(std::string& line, double t, const Eigen::Vector3d& p,
+                            Eigen::Quaterniond q) {
+  if (q.w() < 0) q.coeffs() = -q.coeffs();  // q and -q are one rotation: print qw >= 0
+  line.clear();
+  append_fixed(line, t, trajectory_time_decimals);
+  for (const double v : {p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w()}) {
+    line.push_back(' ');
+    append_fixed(line, v, trajectory_pose_decimals);
+  }
+  line.push_back('\n');
+}
+
+inline void write_checked(std::ostream& out, const std::string& line, std::string_view where) {
+  out.write(line.data(), static_cast<std::streamsize>(line.size()));
+  if (!out) throw io_error("rangenav: " + std::string(where) + ": write error");
+}
+
+inline std::ofstream open_for_writing(const std::filesystem::path& path, std::string_view where) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out)
+    throw io_error("rangenav: " + std::string(where) + ": " + path.string() +
+                   ": cannot open file for writing");
+  return out;
+}
+
+inline void close_checked(std::ofstream& out, const std::filesystem::path& path,
+                          std::string_view where) {
+  out.close();
+  if (!out)
+    throw io_error("rangenav: " + std::string(where) + ": " + path.string() + ": write error");
+}
+
+// Calls parse(tokens, fail) for every non-comment line of a text stream or file; `fail(message)`
+// throws io_error naming the source and the line.
+template <class Parse>
+void for_each_data_line(std::istream& in, std::string_view name, std::string_view where,
+                        Parse&& parse) {
+  std::string line;
+  std::vector<std::string_view> tokens;
+  std::size_t number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    split_whitespace(line, tokens);
+    if (tokens.empty() || tokens[0].front() == '#') continue;
+    const auto fail = [&](std::string_view message) {
+      throw io_error("rangenav: " + std::string(where) + ": " + std::string(name) + ":" +
+                     std::to_string(number) + ": " + std::string(message));
+    };
+    parse(tokens, fail);
+  }
+  if (in.bad())
+    throw io_error("rangenav: " + std::string(where) + ": " + std::string(name) + ": read error");
+}
+
+template <class Parse>
+void for_each_data_line(const std::filesystem::path& path, std::string_view where, Parse&& parse) {
+  LineReader lines(path, where);
+  std::string_view line;
+  std::vector<std::string_view> tokens;
+  while (lines.next(line)) {
+    split_whitespace(line, tokens);
+    if (tokens.empty() || tokens[0].front() == '#') continue;
+    const auto fail = [&](std::string_view message) { lines.fail_line(message); };
+    parse(tokens, fail);
+  }
+}
+
+// Parses exactly `count` numbers into `values`, or fails naming the field (1-based).
+template <class Fail>
+void parse_numbers(const std::vector<std::string_view>& tokens, std::size_t count, double* values,
+                   const Fail& fail) {
+  if (tokens.size() != count)
+    fail("expected " + std::to_string(count) + " fields, found " + std::to_string(tokens.size()));
+  for (std::size_t i = 0; i < count; ++i)
+    if (!parse_double(tokens[i], values[i]) || !std::isfinite(values[i]))
+      fail("field " + std::to_string(i + 1) + " is not a finite number: '" +
+           std::string(tokens[i]) + "'");
+}
+
+template <class Fail>
+StampedTransform3d parse_tum(const std::vector<std::string_view>& tokens, const Fail& fail) {
+  double v[8] = {};
+  parse_numbers(tokens, 8, v, fail);
+  Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // Eigen's constructor order is (w, x, y, z)
+  const double norm = q.norm();
+  // Printed quaternions are unit to their precision; anything else is a different format.
+  if (!(std::abs(norm - 1.0) <= 1e-3))
+    fail("quaternion norm " + ::rangenav::detail::format_value(norm) + " is not 1");
+  q.normalize();
+  StampedTransform3d stamped;
+  stamped.timestamp = v[0];
+  stamped.pose = Transform3d::Identity();
+  stamped.pose.linear() = q.toRotationMatrix();
+  stamped.pose.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+  return stamped;
+}
+
+template <class Fail>
+StampedPose2d parse_xytheta(const std::vector<std::string_view>& tokens, const Fail& fail) {
+  double v[4] = {};
+  parse_numbers(tokens, 4, v, fail);
+  return {v[0], Pose2d{v[1], v[2], normalize_angle(v[3])}};
+}
+
+}  // namespace detail
+
+// ---- TUM ------------------------------------------------------------------------------------
+
+/// Writes "t tx ty tz qx qy qz qw" lines. Throws invalid_argument for mismatched sizes or a
+/// non-finite entry.
+inline void write_tum(std::ostream& out, std::span<const double> timestamps,
+                      std::span<const Transform3d> poses) {
+  detail::check_trajectory_sizes("write_tum", timestamps.size(), poses.size());
+  std::string line;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    detail::require_finite_entry("write_tum", i,
+                                 std::isfinite(timestamps[i]) && poses[i].matrix().allFinite());
+    detail::append_tum_line(line, timestamps[i], poses[i].translation(),
+                            Eigen::Quaterniond(poses[i].linear()));
+    detail::write_checked(out, line, "write_tum");
+  }
+}
+
+/// Writes planar poses as TUM lines (z = 0, rotation theta about z).
+inline void write_tum(std::ostream& out, std::span<const double> timestamps,
+                      std::span<const Pose2d> poses) {
+  detail::check_trajectory_sizes("write_tum", timestamps.size(), poses.size());
+  std::string line;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const Pose2d& p = poses[i];
+    detail::require_finite_entry("write_tum", i,
+                                 std::isfinite(timestamps[i]) && std::isfinite(p.x) &&
+                                     std::isfinite(p.y) && std::isfinite(p.theta));
+    detail::append_tum_line(
+        line, timestamps[i], Eigen::Vector3d(p.x, p.y, 0.0),
+        Eigen::Quaterniond(Eigen::AngleAxisd(p.theta, Eigen::Vector3d::UnitZ())));
+    detail::write_checked(out, line, "write_tum");
+  }
+}
+
+/// Writes stamped transforms as TUM lines.
+inline void write_tum(std::ostream& out, std::span<const StampedTransform3d> trajectory) {
+  std::vector<double> timestamps;
+  std::vector<Transform3d> poses;
+  timestamps.reserve(trajectory.size());
+  poses.reserve(trajectory.size());
+  for (const auto& s : trajectory) {
+    timestamps.push_back(s.timestamp);
+    poses.push_back(s.pose);
+  }
+  write_tum(out, timestamps, poses);
+}
+
+/// Writes a TUM file; throws io_error when the file cannot be written.
+inline void write_tum(const std::filesystem::path& path, std::span<const double> timestamps,
+                      std::span<const Transform3d> poses) {
+  auto out = detail::open_for_writing(path, "write_tum");
+  write_tum(out, timestamps, poses);
+  detail::close_checked(out, path, "write_tum");
+}
+
+inline void write_tum(const std::filesystem::path& path, std::span<const double> timestamps,
+                      std::span<const Pose2d> poses) {
+  auto out = detail::open_for_writing(path, "write_tum");
+  write_tum(out, timestamps, poses);
+  detail::close_checked(out, path, "write_tum");
+}
+
+inline void write_tum(const std::filesystem::path& path,
+                      std::span<const StampedTransform3d> trajectory) {
+  auto out = detail::open_for_writing(path, "write_tum");
+  write_tum(out, trajectory);
+  detail::close_checked(out, path, "write_tum");
+}
+
+/// Reads a TUM trajectory from a stream; `name` stands for the source in error messages.
+inline std::vector<StampedTransform3d> read_tum(std::istream& in,
+                                                std::string_view name = "<stream>") {
+  std::vector<StampedTransform3d> trajectory;
+  detail::for_each_data_line(in, name, "tum", [&](const auto& tokens, const auto& fail) {
+    trajectory.push_back(detail::parse_tum(tokens, fail));
+  });
+  return trajectory;
+}
+
+/// Reads a TUM trajectory file (plain or gzip).
+inline std::vector<StampedTransform3d> read_tum(const std::filesystem::path& path) {
+  std::vector<StampedTransform3d> trajectory;
+  detail::for_each_data_line(path, "tum", [&](const auto& tokens, const auto& fail) {
+    trajectory.push_back(detail::parse_tum(tokens, fail));
+  });
+  return trajectory;
+}
+
+// ---- x y theta ------------------------------------------------------------------------------
+
+/// Writes "t x y theta" lines. Throws invalid_argument for mismatched sizes or a non-finite
+/// entry.
+inline void write_xytheta(std::ostream& out, std::span<const double> timestamps,
+                          std::span<const Pose2d> poses) {
+  detail::check_trajectory_sizes("write_xytheta", timestamps.size(), poses.size());
+  std::string line;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const Pose2d& p = poses[i];
+    detail::require_finite_entry("write_xytheta", i,
+                                 std::isfinite(timestamps[i]) && std::isfinite(p.x) &&
+                                     std::isfinite(p.y) && std::isfinite(p.theta));
+    line.clear();
+    detail::append_fixed(line, timestamps[i], detail::trajectory_time_decimals);
+    for (const double v : {p.x, p.y, p.theta}) {
+      line.push_back(' ');
+      detail::append_fixed(line, v, detail::trajectory_pose_decimals);
+    }
+    line.push_back('\n');
+    detail::write_checked(out, line, "write_xytheta");
+  }
+}
+
+inline void write_xytheta(std::ostream& out, std::span<const StampedPose2d> trajectory) {
+  std::vector<double> timestamps;
+  std::vector<Pose2d> poses;
+  timestamps.reserve(trajectory.size());
+  poses.reserve(trajectory.size());
+  for (const auto& s : trajectory) {
+    timestamps.push_back(s.timestamp);
+    poses.push_back(s.pose);
+  }
+  write_xytheta(out, timestamps, poses);
+}
+
+inline void write_xytheta(const std::filesystem::path& path, std::span<const double> timestamps,
+                          std::span<const Pose2d> poses) {
+  auto out = detail::open_for_writing(path, "write_xytheta");
+  write_xytheta(out, timestamps, poses);
+  detail::close_checked(out, path, "write_xytheta");
+}
+
+inline void write_xytheta(const std::filesystem::path& path,
+                          std::span<const StampedPose2d> trajectory) {
+  auto out = detail::open_for_writing(path, "write_xytheta");
+  write_xytheta(out, trajectory);
+  detail::close_checked(out, path, "write_xytheta");
+}
+
+/// Reads "t x y theta" lines from a stream; theta is normalised to (-pi, pi].
+inline std::vector<StampedPose2d> read_xytheta(std::istream& in,
+                                               std::string_view name = "<stream>") {
+  std::vector<StampedPose2d> trajectory;
+  detail::for_each_data_line(in, name, "xytheta", [&](const auto& tokens, const auto& fail) {
+    trajectory.push_back(detail::parse_xytheta(tokens, fail));
+  });
+  return trajectory;
+}
+
+/// Reads an x-y-theta trajectory file (plain or gzip).
+inline std::vector<StampedPose2d> read_xytheta(const std::filesystem::path& path) {
+  std::vector<StampedPose2d> trajectory;
+  detail::for_each_data_line(path, "xytheta", [&](const auto& tokens, const auto& fail) {
+    trajectory.push_back(detail::parse_xytheta(tokens, fail));
+  });
+  return trajectory;
+}
+
+}  // namespace rangenav::io

@@ -1,0 +1,247 @@
+#pragma once
+// Filters for time-of-flight depth images (3D-perception paper 002 §7.1): amplitude threshold,
+// 3x3 median filter and the jump-edge filter of Eq. (13)-(14) (after May et al. 2009).
+//
+// Jump edges are spurious readings between a near and a far surface ("mixed pixels"). For a
+// pixel p_i and each of its eight neighbours p_n, the triangle (focal point f = 0, p_i, p_n) has
+// the angle φ at f between the two rays, and by the law of sines the angle at p_i satisfies
+//   sin θ_i,n = ||p_n|| sin φ / ||p_n - p_i||,                                    Eq. (13)
+// with θ_i,n obtuse when p_n lies behind p_i. A pixel whose largest angle θ_i = max_n θ_i,n exceeds
+// ε_θ sees a neighbour almost straight behind it along its own ray (Eq. 14): J = {p_i | θ_i > ε_θ}.
+// That holds for a mixed pixel and for the rim pixel of the near surface alike; with
+// `keep_near_edges` (default) a pixel is a jump edge only if it also has a neighbour almost
+// straight in front of it (θ_i,n < π - ε_θ), i.e. it floats between two surfaces, so the real
+// edge of the near object survives. The filter is sensitive to noise: run the median filter first.
+//
+// Every filter works in place on the depth channel, marks removed pixels with NaN and allocates
+// nothing once its scratch buffers have the image's size.
+
+#include <algorithm>
+#include <cmath>
+#include <concepts>
+#include <cstddef>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+#include "rangenav/core/error.hpp"
+#include "rangenav/scan/depth_image.hpp"
+
+namespace rangenav {
+
+/// Invalidates (NaN) every pixel whose amplitude is below `threshold` (§7.1). Returns the number
+/// of pixels invalidated. Throws when the image has no amplitude channel.
+template <std::floating_point Scalar>
+std::size_t apply_amplitude_threshold(DepthImage<Scalar>& image, Scalar threshold) {
+  image.validate("apply_amplitude_threshold");
+  detail::require_finite("apply_amplitude_threshold", "threshold", threshold);
+  if (image.amplitude.empty())
+    detail::throw_invalid("apply_amplitude_threshold", "the image has no amplitude channel");
+  std::size_t removed = 0;
+  for (std::size_t i = 0; i < image.depth.size(); ++i)
+    if (DepthImage<Scalar>::is_valid_depth(image.depth[i]) && !(image.amplitude[i] >= threshold)) {
+      image.depth[i] = std::numeric_limits<Scalar>::quiet_NaN();
+      ++removed;
+    }
+  return removed;
+}
+
+/// 3x3 median filter on the depth channel over valid pixels: a valid pixel takes the median of
+/// the valid depths in its 3x3 window (the lower middle one for an even count); invalid pixels
+/// stay invalid. `scratch` holds a copy of the input between calls.
+template <std::floating_point Scalar>
+void apply_median_filter(DepthImage<Scalar>& image, std::vector<Scalar>& scratch) {
+  image.validate("apply_median_filter");
+  const std::size_t w = image.width(), h = image.height();
+  scratch.assign(image.depth.begin(), image.depth.end());
+  Scalar window[9];
+  const auto valid = [](Scalar d) { return DepthImage<Scalar>::is_valid_depth(d); };
+  for (std::size_t r = 0; r < h; ++r)
+    for (std::size_t c = 0; c < w; ++c) {
+      if (!valid(scratch[r * w + c])) continue;
+      int n = 0;
+      if (r > 0 && c > 0 && r + 1 < h && c + 1 < w) {  // interior: try the full window
+        const Scalar* row0 = &scratch[(r - 1) * w + c - 1];
+        const Scalar* row1 = row0 + w;
+        const Scalar* row2 = row1 + w;
+        for (int k = 0; k < 3; ++k) {
+          window[n] = row0[k];
+          n += valid(row0[k]) ? 1 : 0;
+          window[n] = row1[k];
+          n += valid(row1[k]) ? 1 : 0;
+          window[n] = row2[k];
+          n += valid(row2[k]) ? 1 : 0;
+        }
+        if (n == 9) {  // the median of nine by the 19-exchange network (Paeth / Devillard)
+          auto sort2 = [&](int a, int b) {
+            const Scalar lo = std::min(window[a], window[b]);
+            window[b] = std::max(window[a], window[b]);
+            window[a] = lo;
+          };
+          sort2(1, 2), sort2(4, 5), sort2(7, 8), sort2(0, 1), sort2(3, 4), sort2(6, 7);
+          sort2(1, 2), sort2(4, 5), sort2(7, 8), sort2(0, 3), sort2(5, 8), sort2(4, 7);
+          sort2(3, 6), sort2(1, 4), sort2(2, 5), sort2(4, 7), sort2(4, 2), sort2(6, 4);
+          sort2(4, 2);
+          image.depth[r * w + c] = window[4];
+          continue;
+        }
+      } else {
+        const std::size_t r0 = r == 0 ? 0 : r - 1, r1 = std::min(r + 1, h - 1);
+        const std::size_t c0 = c == 0 ? 0 : c - 1, c1 = std::min(c + 1, w - 1);
+        for (std::size_t rr = r0; rr <= r1; ++rr)
+          for (std::size_t cc = c0; cc <= c1; ++cc) {
+            const Scalar d = scratch[rr * w + cc];
+            if (valid(d)) window[n++] = d;
+          }
+      }
+      // Insertion sort of fewer than nine values.
+      for (int i = 1; i < n; ++i) {
+        const Scalar v = window[i];
+        int j = i - 1;
+        while (j >= 0 && window[j] > v) {
+          window[j + 1] = window[j];
+          --j;
+        }
+        window[j + 1] = v;
+      }
+      image.depth[r * w + c] = window[(n - 1) / 2];
+    }
+}
+
+/// The same, with its own scratch buffer (allocates).
+template <std::floating_point Scalar>
+void apply_median_filter(DepthImage<Scalar>& image) {
+  std::vector<Scalar> scratch;
+  apply_median_filter(image, scratch);
+}
+
+/// Parameters of the jump-edge filter.
+template <std::floating_point Scalar = double>
+struct JumpEdgeParams {
+  /// ε_θ of Eq. (14), rad. The paper gives no value; 170 deg keeps surfaces seen at up to about
+  /// 80 deg incidence.
+  Scalar epsilon_theta{std::numbers::pi_v<Scalar> * Scalar(170) / Scalar(180)};
+  /// Only pixels with a neighbour almost straight behind *and* one almost straight in front are
+  /// jump edges (mixed pixels); false applies Eq. (14) alone, which also removes the rim of the
+  /// nearer surface.
+  bool keep_near_edges{true};
+
+  void validate(std::string_view where = "JumpEdgeParams") const {
+    if (!(epsilon_theta > std::numbers::pi_v<Scalar> / 2 &&
+          epsilon_theta < std::numbers::pi_v<Scalar>))
+      detail::throw_invalid_argument(where, "epsilon_theta", epsilon_theta,
+                                     "must lie in (pi/2, pi)");
+  }
+};
+
+/// The jump-edge filter of Eq. (13)-(14) for one camera: the cosines of the angles φ between
+/// neighbouring pixel rays are computed once from the intrinsics; filter() then needs no
+/// trigonometry (the angle test is done on cosines, squared) and allocates nothing.
+template <std::floating_point Scalar = double>
+class JumpEdgeFilter {
+ public:
+  JumpEdgeFilter() = default;
+  JumpEdgeFilter(const PinholeIntrinsics<Scalar>& intrinsics, DepthKind kind,
+                 const JumpEdgeParams<Scalar>& params = {})
+      : intrinsics_(intrinsics), kind_(kind), params_(params) {
+    intrinsics_.validate("JumpEdgeFilter");
+    params_.validate("JumpEdgeFilter");
+    const std::size_t w = intrinsics_.width, h = intrinsics_.height, n = w * h;
+    ray_norm_.resize(n);
+    std::vector<Point<3, Scalar>> unit(n);
+    for (std::size_t r = 0; r < h; ++r)
+      for (std::size_t c = 0; c < w; ++c) {
+        const Point<3, Scalar> ray = intrinsics_.optical_ray(r, c);
+        ray_norm_[r * w + c] = ray.norm();
+        unit[r * w + c] = ray / ray.norm();
+      }
+    // cos φ towards the right, lower, lower-right and lower-left neighbours; the other four
+    // directions are the same pairs seen from the other pixel.
+    for (int k = 0; k < 4; ++k)
+      cos_phi_[k].assign(n, Scalar(1));
+    for (std::size_t r = 0; r < h; ++r)
+      for (std::size_t c = 0; c < w; ++c) {
+        const std::size_t i = r * w + c;
+        for (int k = 0; k < 4; ++k) {
+          const auto [dr, dc] = offsets_[k];
+          const std::ptrdiff_t rr = static_cast<std::ptrdiff_t>(r) + dr;
+          const std::ptrdiff_t cc = static_cast<std::ptrdiff_t>(c) + dc;
+          if (rr < 0 || cc < 0 || rr >= static_cast<std::ptrdiff_t>(h) ||
+              cc >= static_cast<std::ptrdiff_t>(w))
+            continue;
+          cos_phi_[k][i] =
+              unit[i].dot(unit[static_cast<std::size_t>(rr) * w + static_cast<std::size_t>(cc)]);
+        }
+      }
+  }
+
+  [[nodiscard]] const JumpEdgeParams<Scalar>& params() const { return params_; }
+
+  /// Marks the jump edges of `image` (same intrinsics as the filter) invalid; returns how many.
+  std::size_t filter(DepthImage<Scalar>& image) {
+    if (image.width() != intrinsics_.width || image.height() != intrinsics_.height)
+      detail::throw_invalid_argument("JumpEdgeFilter::filter", "image.width()", image.width(),
+                                     "and height must match the filter's intrinsics");
+    image.validate("JumpEdgeFilter::filter");
+    const std::size_t w = intrinsics_.width, h = intrinsics_.height, n = w * h;
+    radial_.resize(n);
+    flags_.assign(n, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Scalar d = image.depth[i];
+      radial_[i] = DepthImage<Scalar>::is_valid_depth(d)
+                       ? (kind_ == DepthKind::z_depth ? d * ray_norm_[i] : d)
+                       : Scalar(0);
+    }
+    // cos θ of the angle at p (towards f and towards q): (|p| - |q| cos φ) / |q - p|.
+    // θ > ε_θ (behind) <=> cos θ < cos ε_θ < 0; θ < π - ε_θ (in front) <=> cos θ > -cos ε_θ.
+    const Scalar ce = -std::cos(params_.epsilon_theta);  // > 0
+    const Scalar ce_sq = ce * ce;
+    constexpr unsigned char behind = 1, in_front = 2;
+    for (std::size_t r = 0; r < h; ++r)
+      for (std::size_t c = 0; c < w; ++c) {
+        const std::size_t i = r * w + c;
+        const Scalar a = radial_[i];
+        if (a == Scalar(0)) continue;
+        for (int k = 0; k < 4; ++k) {
+          const auto [dr, dc] = offsets_[k];
+          const std::ptrdiff_t rr = static_cast<std::ptrdiff_t>(r) + dr;
+          const std::ptrdiff_t cc = static_cast<std::ptrdiff_t>(c) + dc;
+          if (rr >= static_cast<std::ptrdiff_t>(h) || cc < 0 ||
+              cc >= static_cast<std::ptrdiff_t>(w))
+            continue;
+          const std::size_t j = static_cast<std::size_t>(rr) * w + static_cast<std::size_t>(cc);
+          const Scalar b = radial_[j];
+          if (b == Scalar(0)) continue;
+          const Scalar cphi = cos_phi_[k][i];
+          const Scalar dist_sq = a * a + b * b - 2 * a * b * cphi;  // |p_i - p_n|^2
+          const Scalar ta = a - b * cphi;                           // |p_i - p_n| cos θ at p_i
+          const Scalar tb = b - a * cphi;                           // |p_i - p_n| cos θ at p_n
+          const Scalar lim = ce_sq * dist_sq;
+          if (ta < 0 && ta * ta > lim) flags_[i] |= behind;
+          if (ta > 0 && ta * ta > lim) flags_[i] |= in_front;
+          if (tb < 0 && tb * tb > lim) flags_[j] |= behind;
+          if (tb > 0 && tb * tb > lim) flags_[j] |= in_front;
+        }
+      }
+    const unsigned char jump = params_.keep_near_edges ? (behind | in_front) : behind;
+    std::size_t removed = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      if ((flags_[i] & jump) == jump) {
+        image.depth[i] = std::numeric_limits<Scalar>::quiet_NaN();
+        ++removed;
+      }
+    return removed;
+  }
+
+ private:
+  static constexpr std::pair<int, int> offsets_[4] = {{0, 1}, {1, 0}, {1, 1}, {1, -1}};
+  PinholeIntrinsics<Scalar> intrinsics_{};
+  DepthKind kind_{DepthKind::radial};
+  JumpEdgeParams<Scalar> params_{};
+  std::vector<Scalar> ray_norm_;
+  std::vector<Scalar> cos_phi_[4];
+  std::vector<Scalar> radial_;
+  std::vector<unsigned char> flags_;
+};
+
+}  // namespace rangenav

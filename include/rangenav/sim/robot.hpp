@@ -1,0 +1,264 @@
+#pragma once
+// A simulated differential-drive robot: it follows (v, omega) commands at a fixed control rate
+// (exact arc integration of the unicycle model), knows its true pose, integrates an odometry
+// pose from wheel velocities with configurable systematic (scale, bias) and random errors, and
+// checks its footprint (circle or rectangle, over a height band) against the World, reporting the
+// primitives it touches. A step that would end in contact is not carried out (the robot stops,
+// as on a bumper hit) and its contacts are returned.
+
+#include <algorithm>
+#include <boost/geometry.hpp>
+#include <boost/geometry/geometries/point_xy.hpp>
+#include <boost/geometry/geometries/polygon.hpp>
+#include <boost/geometry/geometries/segment.hpp>
+#include <cmath>
+#include <cstddef>
+#include <random>
+#include <string_view>
+#include <vector>
+
+#include "rangenav/core/angles.hpp"
+#include "rangenav/core/error.hpp"
+#include "rangenav/core/types.hpp"
+#include "rangenav/sim/world.hpp"
+
+namespace rangenav::sim {
+
+/// The robot's outline on the floor and the height band it occupies: obstacles whose z-range
+/// overlaps [z_min, z_max] can be touched; a table top above z_max can be driven under.
+struct Footprint {
+  enum class Shape { circle, rectangle };
+  Shape shape{Shape::circle};
+  double radius{0.3};    ///< circle
+  double length{0.6};    ///< rectangle, along the robot's x axis
+  double width{0.5};     ///< rectangle, along y
+  double x_offset{0.0};  ///< rectangle centre ahead of the rotation centre
+  double z_min{0.02};    ///< ground clearance (m)
+  double z_max{1.2};     ///< top of the robot (m)
+
+  [[nodiscard]] static Footprint circle(double radius, double z_min = 0.02, double z_max = 1.2) {
+    Footprint f;
+    f.radius = radius;
+    f.z_min = z_min;
+    f.z_max = z_max;
+    return f;
+  }
+  [[nodiscard]] static Footprint rectangle(double length, double width, double z_min = 0.02,
+                                           double z_max = 1.2, double x_offset = 0.0) {
+    Footprint f;
+    f.shape = Shape::rectangle;
+    f.length = length;
+    f.width = width;
+    f.x_offset = x_offset;
+    f.z_min = z_min;
+    f.z_max = z_max;
+    return f;
+  }
+
+  void validate(std::string_view where) const {
+    if (shape == Shape::circle) {
+      detail::require_positive(where, "footprint.radius", radius);
+    } else {
+      detail::require_positive(where, "footprint.length", length);
+      detail::require_positive(where, "footprint.width", width);
+      detail::require_finite(where, "footprint.x_offset", x_offset);
+    }
+    detail::require_finite(where, "footprint.z_min", z_min);
+    detail::require_finite(where, "footprint.z_max", z_max);
+    if (!(z_max > z_min))
+      detail::throw_invalid_argument(
+          where, "footprint.z_max", z_max,
+          "must exceed footprint.z_min = " + detail::format_value(z_min));
+  }
+
+  /// Radius of the circle that contains the footprint (about the rotation centre).
+  [[nodiscard]] double bounding_radius() const {
+    return shape == Shape::circle ? radius : std::hypot(std::abs(x_offset) + length / 2, width / 2);
+  }
+};
+
+/// The primitives a footprint at a pose touches (holes: the footprint is over a lowered floor).
+[[nodiscard]] inline std::vector<PrimitiveRef> footprint_contacts(const World& world,
+                                                                  const Footprint& fp,
+                                                                  const Pose2d& pose) {
+  namespace bg = boost::geometry;
+  using P = bg::model::d2::point_xy<double>;
+  using Polygon = bg::model::polygon<P, false, true>;  // counter-clockwise, closed
+  using Segment = bg::model::segment<P>;
+  const auto to_p = [](const Point2d& v) { return P(v.x(), v.y()); };
+  const auto rect = [&](const Point2d& c, const Point2d& half, double yaw) {
+    const Eigen::Rotation2Dd r(yaw);
+    Polygon poly;
+    for (const auto& [sx, sy] :
+         {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}, {-1.0, -1.0}})
+      poly.outer().push_back(to_p(c + r * Point2d(sx * half.x(), sy * half.y())));
+    return poly;
+  };
+  const bool circle = fp.shape == Footprint::Shape::circle;
+  const P centre(pose.x, pose.y);
+  Polygon body;
+  if (!circle)
+    body = rect(pose.transform_point({fp.x_offset, 0}), {fp.length / 2, fp.width / 2}, pose.theta);
+  const auto touches_polygon = [&](const Polygon& poly) {
+    return circle ? bg::distance(centre, poly) <= fp.radius : bg::intersects(body, poly);
+  };
+  const auto band = [&](double z0, double z1) { return z0 <= fp.z_max && z1 >= fp.z_min; };
+
+  const double r = fp.bounding_radius();
+  std::vector<PrimitiveRef> candidates, contacts;
+  world.primitives_near(pose.position() - Point2d::Constant(r),
+                        pose.position() + Point2d::Constant(r), candidates);
+  for (const PrimitiveRef& ref : candidates) {
+    bool touch = false;
+    switch (ref.kind) {
+      case SurfaceKind::wall: {
+        const Wall& w = world.walls()[ref.index];
+        if (!band(0, w.height)) break;
+        const Segment s(to_p(w.a), to_p(w.b));
+        touch = circle ? bg::distance(centre, s) <= fp.radius : bg::intersects(body, s);
+        break;
+      }
+      case SurfaceKind::box: {
+        const Box& b = world.boxes()[ref.index];
+        if (band(b.z_min, b.z_max)) touch = touches_polygon(rect(b.center, b.size / 2, b.yaw));
+        break;
+      }
+      case SurfaceKind::cylinder: {
+        const Cylinder& c = world.cylinders()[ref.index];
+        if (!band(c.z_min, c.z_max)) break;
+        touch = circle ? (c.center - pose.position()).norm() <= fp.radius + c.radius
+                       : bg::distance(to_p(c.center), body) <= c.radius;
+        break;
+      }
+      case SurfaceKind::door: {
+        const Box b = world.doors()[ref.index].leaf();
+        if (band(b.z_min, b.z_max)) touch = touches_polygon(rect(b.center, b.size / 2, b.yaw));
+        break;
+      }
+      case SurfaceKind::hole: {
+        const FloorHole& h = world.holes()[ref.index];
+        touch = touches_polygon(rect(h.center, h.size / 2, h.yaw));
+        break;
+      }
+      default:
+        break;
+    }
+    if (touch) contacts.push_back(ref);
+  }
+  return contacts;
+}
+
+/// Systematic and random odometry errors. The wheel odometry measures
+///   v_m = (1 + v_scale) v + N(0, v_sigma^2),  omega_m = (1 + omega_scale) omega + omega_bias +
+///   N(0, omega_sigma^2)
+/// once per control step and integrates them like the true motion.
+struct OdometryNoise {
+  double v_scale{0.0};      ///< relative scale error of the travelled distance
+  double omega_scale{0.0};  ///< relative scale error of the turn rate
+  double omega_bias{0.0};   ///< rad/s (drift)
+  double v_sigma{0.0};      ///< m/s per step
+  double omega_sigma{0.0};  ///< rad/s per step
+};
+
+struct DifferentialDriveParams {
+  double control_rate{50.0};  ///< Hz
+  double max_v{1.0};          ///< |v| is clamped to this (m/s)
+  double max_omega{2.0};      ///< |omega| is clamped to this (rad/s)
+  Footprint footprint{};
+  OdometryNoise odometry{};
+};
+
+/// What one control step did.
+struct StepResult {
+  bool moved{true};                    ///< false when the step would have hit something
+  std::vector<PrimitiveRef> contacts;  ///< what the robot would touch at the step's end
+  double v_measured{0};                ///< odometry's velocity reading for this step
+  double omega_measured{0};
+};
+
+class DifferentialDriveRobot {
+ public:
+  explicit DifferentialDriveRobot(const DifferentialDriveParams& params = {},
+                                  const Pose2d& start = {})
+      : params_(params) {
+    constexpr std::string_view where = "DifferentialDriveRobot";
+    detail::require_positive(where, "control_rate", params_.control_rate);
+    detail::require_positive(where, "max_v", params_.max_v);
+    detail::require_positive(where, "max_omega", params_.max_omega);
+    params_.footprint.validate(where);
+    const auto& o = params_.odometry;
+    detail::require_finite(where, "odometry.v_scale", o.v_scale);
+    detail::require_finite(where, "odometry.omega_scale", o.omega_scale);
+    detail::require_finite(where, "odometry.omega_bias", o.omega_bias);
+    detail::require_non_negative(where, "odometry.v_sigma", o.v_sigma);
+    detail::require_non_negative(where, "odometry.omega_sigma", o.omega_sigma);
+    reset(start);
+  }
+
+  /// Puts the robot at `pose` (odometry restarts there too) at time 0.
+  void reset(const Pose2d& pose) {
+    if (!(std::isfinite(pose.x) && std::isfinite(pose.y) && std::isfinite(pose.theta)))
+      detail::throw_invalid("DifferentialDriveRobot::reset", "pose must be finite");
+    pose_ = {pose.x, pose.y, normalize_angle(pose.theta)};
+    odometry_ = pose_;
+    time_ = 0;
+  }
+
+  [[nodiscard]] const DifferentialDriveParams& params() const { return params_; }
+  [[nodiscard]] const Pose2d& pose() const { return pose_; }
+  [[nodiscard]] const Pose2d& odometry() const { return odometry_; }
+  [[nodiscard]] double time() const { return time_; }
+  [[nodiscard]] double dt() const { return 1.0 / params_.control_rate; }
+
+  /// The unicycle model integrated exactly over dt (an arc, or a line when omega = 0).
+  [[nodiscard]] static Pose2d integrate(const Pose2d& p, double v, double omega, double dt) {
+    const double th1 = p.theta + omega * dt;
+    if (std::abs(omega) < 1e-12)
+      return {p.x + v * dt * std::cos(p.theta), p.y + v * dt * std::sin(p.theta),
+              normalize_angle(th1)};
+    const double r = v / omega;
+    return {p.x + r * (std::sin(th1) - std::sin(p.theta)),
+            p.y - r * (std::cos(th1) - std::cos(p.theta)), normalize_angle(th1)};
+  }
+
+  /// The primitives the footprint touches at `pose`.
+  [[nodiscard]] std::vector<PrimitiveRef> contacts(const World& world, const Pose2d& pose) const {
+    return footprint_contacts(world, params_.footprint, pose);
+  }
+
+  /// One control step with command (v, omega), clamped to the limits. When the new pose would
+  /// touch something the robot stays where it is (and so does its odometry).
+  template <class Engine>
+  StepResult step(const World& world, double v, double omega, Engine& rng) {
+    StepResult result;
+    if (!std::isfinite(v)) v = 0;
+    if (!std::isfinite(omega)) omega = 0;
+    v = std::clamp(v, -params_.max_v, params_.max_v);
+    omega = std::clamp(omega, -params_.max_omega, params_.max_omega);
+    const double h = dt();
+    time_ += h;
+    const Pose2d next = integrate(pose_, v, omega, h);
+    result.contacts = contacts(world, next);
+    if (!result.contacts.empty()) {
+      result.moved = false;
+      return result;
+    }
+    pose_ = next;
+    const auto& o = params_.odometry;
+    double vm = (1 + o.v_scale) * v, wm = (1 + o.omega_scale) * omega + o.omega_bias;
+    if (o.v_sigma > 0) vm += std::normal_distribution<double>(0.0, o.v_sigma)(rng);
+    if (o.omega_sigma > 0) wm += std::normal_distribution<double>(0.0, o.omega_sigma)(rng);
+    odometry_ = integrate(odometry_, vm, wm, h);
+    result.v_measured = vm;
+    result.omega_measured = wm;
+    return result;
+  }
+
+ private:
+  DifferentialDriveParams params_;
+  Pose2d pose_{};
+  Pose2d odometry_{};
+  double time_{0};
+};
+
+}  // namespace rangenav::sim

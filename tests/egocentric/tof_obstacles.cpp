@@ -1,0 +1,137 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "rangenav/egocentric/tof_obstacles.hpp"
+#include "rangenav/egocentric/virtual_map.hpp"
+#include "rangenav/scan/pitching.hpp"
+#include "rangenav/scan/tof_filters.hpp"
+
+using namespace rangenav;
+
+namespace {
+
+// Floor at z = 0 (dropping to -0.3 m beyond stair_x) and one axis-aligned box.
+struct Scene {
+  double stair_x = 100.0;
+  Point3d box_min{1.2, -0.2, 0.0}, box_max{1.5, 0.2, 0.2};
+
+  double cast(const Point3d& o, const Point3d& d) const {
+    double best = std::numeric_limits<double>::infinity();
+    if (d.z() < 0) {
+      const double t0 = -o.z() / d.z();
+      best = (o + t0 * d).x() <= stair_x ? t0 : (-0.3 - o.z()) / d.z();
+    }
+    double tmin = 0, tmax = best;
+    for (int k = 0; k < 3; ++k) {
+      double t1 = (box_min[k] - o[k]) / d[k], t2 = (box_max[k] - o[k]) / d[k];
+      if (t1 > t2) std::swap(t1, t2);
+      tmin = std::max(tmin, t1);
+      tmax = std::min(tmax, t2);
+    }
+    if (tmin <= tmax && tmin > 0) best = std::min(best, tmin);
+    return best;
+  }
+};
+
+// An SR4000-like camera (176 x 144, 43 x 34 deg) at 0.8 m, tilted 30 deg down.
+Transform3d camera_extrinsics() {
+  Transform3d t = Transform3d::Identity();
+  t.linear() = pitch_rotation(deg_to_rad(30.0));
+  t.translation() = Point3d(0.0, 0.0, 0.8);
+  return t;
+}
+
+DepthImage<double> render(const Scene& scene, double noise, unsigned seed = 3) {
+  DepthImage<double> img;
+  img.intrinsics =
+      PinholeIntrinsics<double>::from_fov(176, 144, deg_to_rad(43.0), deg_to_rad(34.0));
+  img.kind = DepthKind::radial;
+  img.depth.resize(176 * 144);
+  const Transform3d extr = camera_extrinsics();
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, noise);
+  for (std::size_t r = 0; r < 144; ++r)
+    for (std::size_t c = 0; c < 176; ++c) {
+      const Point3d dir = extr.linear() * img.pixel_point(r, c, 1.0);
+      const double t = scene.cast(extr.translation(), dir);
+      img.depth[r * 176 + c] = std::isfinite(t) && t < 5.0 ? t + n(rng) : 0.0;
+    }
+  return img;
+}
+
+}  // namespace
+
+TEST_CASE("height-image obstacles (Eq. 15) lie on the box, none on the floor",
+          "[egocentric][tof]") {
+  HeightImageObstacleDetector<double> detector;
+  auto floor_only = render(Scene{100.0, {0, 0, 0}, {0, 0, 0}}, 0.005);
+  apply_median_filter(floor_only);
+  CHECK(detector.detect(floor_only, camera_extrinsics()) == 0);
+  CHECK(detector.virtual_scan().valid_count() == 0);
+
+  auto img = render(Scene{}, 0.005);
+  apply_median_filter(img);
+  const std::size_t n = detector.detect(img, camera_extrinsics());
+  CHECK(n > 100);
+  for (const auto& p : detector.obstacle_points()) {
+    REQUIRE(p.x() >= 1.15);
+    REQUIRE(p.x() <= 1.55);
+    REQUIRE(std::abs(p.y()) <= 0.25);
+  }
+  // The virtual scan: 176 beams over the camera's 43 deg; straight ahead the box front at 1.2 m.
+  const auto scan = detector.virtual_scan();
+  REQUIRE(scan.size() == 176);
+  CHECK(scan.angle_max() - scan.angle_min() == Approx(deg_to_rad(43.0) * 175.0 / 176.0));
+  const std::size_t mid = 88;
+  REQUIRE(scan.is_valid(mid));
+  CHECK(scan.range(mid) == Approx(1.2).margin(0.05));
+  CHECK_FALSE(scan.is_valid(5));  // beside the box: max range
+  CHECK(scan.range(5) == 5.0);
+}
+
+TEST_CASE("ToF: tables above the corridor are ignored, stairs become obstacles",
+          "[egocentric][tof]") {
+  HeightImageObstacleDetector<double> detector;  // corridor [0, 1] m
+  Scene high{100.0, {1.2, -0.2, 1.2}, {1.5, 0.2, 1.25}};
+  // The camera looks down: a box above 0.8 m is not even in view, so lower the camera's view to
+  // a box whose top is above the corridor but in the image.
+  high.box_min.z() = 1.05;
+  high.box_max.z() = 1.1;
+  high.box_min.x() = 3.0;
+  high.box_max.x() = 3.4;
+  auto img = render(high, 0.0);
+  detector.detect(img, camera_extrinsics());
+  for (const auto& p : detector.obstacle_points())
+    CHECK(p.z() <= 1.0);
+
+  auto stair = render(Scene{1.6, {0, 0, 0}, {0, 0, 0}}, 0.0);
+  REQUIRE(detector.detect(stair, camera_extrinsics()) > 0);
+  const auto scan = detector.virtual_scan();
+  REQUIRE(scan.is_valid(88));
+  CHECK(scan.range(88) == Approx(1.6).margin(0.05));
+  for (const auto& p : detector.obstacle_points())
+    CHECK(p.z() == 0.0);
+}
+
+TEST_CASE("fusion: laser scan and ToF virtual scan in one obstacle map", "[egocentric][tof]") {
+  HeightImageObstacleDetector<double> detector;
+  auto img = render(Scene{}, 0.005);
+  apply_median_filter(img);
+  detector.detect(img, camera_extrinsics());
+  // A 2D laser 0.3 m above the floor sees only the wall at 3 m: the 0.2 m box is below its plane.
+  std::vector<double> ranges(181, 3.0);
+  const LaserScand laser(-std::numbers::pi / 2, std::numbers::pi / 180, 0.05, 30.0, ranges);
+  ObstacleMap<double> map;
+  map.insert(laser, PlanarMount<double>{Pose2d{}, 0.3});
+  map.insert(detector.obstacle_points());
+  CHECK(map.bin(map.bin_index(0.0)).range == Approx(1.2).margin(0.05));
+  CHECK(map.bin(map.bin_index(laser.angle(150))).range == Approx(3.0));  // 60 deg
+  // Inserting the virtual scan itself gives the same nearest obstacle ahead.
+  ObstacleMap<double> map2;
+  map2.insert(laser, PlanarMount<double>{Pose2d{}, 0.3});
+  map2.insert(detector.virtual_scan(), PlanarMount<double>{Pose2d{}, 0.1});
+  CHECK(map2.bin(map2.bin_index(0.0)).range == Approx(1.2).margin(0.05));
+}

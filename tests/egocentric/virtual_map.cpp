@@ -1,0 +1,288 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "rangenav/egocentric/virtual_map.hpp"
+
+using namespace rangenav;
+
+namespace {
+constexpr double pi = std::numbers::pi;
+
+std::vector<Point3d> one(double x, double y, double z = 0.3) {
+  return {Point3d(x, y, z)};
+}
+
+// The non-dummy points of a map as world points, given the robot's world pose.
+std::vector<Point2d> world_points(const ObstacleMap<double>& map, const Pose2d& pose) {
+  std::vector<Point2d> out;
+  for (const auto& p : map.valid_points())
+    out.push_back(pose.transform_point(p));
+  return out;
+}
+}  // namespace
+
+TEST_CASE("fast_atan2 agrees with std::atan2 to 1e-10 in every octant",
+          "[egocentric][virtual_map]") {
+  double worst = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double a = -pi + 2 * pi * (i + 0.5) / 20000;
+    for (const double r : {1e-3, 1.0, 37.0}) {
+      const double y = r * std::sin(a), x = r * std::cos(a);
+      worst = std::max(worst, std::abs(detail::fast_atan2(y, x) - std::atan2(y, x)));
+    }
+  }
+  CHECK(worst < 1e-10);
+  CHECK(detail::fast_atan2(0.0, -1.0) == Approx(pi));
+  CHECK(detail::fast_atan2(-1.0, 0.0) == Approx(-pi / 2));
+  CHECK(detail::fast_atan2(1.0, 1.0) == Approx(pi / 4));
+  CHECK(detail::fast_atan2(0.0, 0.0) == 0.0);
+  CHECK(std::abs(detail::fast_atan2(0.3f, -2.0f) - std::atan2(0.3f, -2.0f)) < 1e-6f);
+}
+
+TEST_CASE("virtual map layout: N = aperture / resolution bins, dummies everywhere",
+          "[egocentric][virtual_map]") {
+  ObstacleMap<double> obstacle;  // 360 deg at 0.5 deg
+  CHECK(obstacle.size() == 720);
+  CHECK(obstacle.valid_count() == 0);
+  CHECK(traits::size(obstacle) == 0);
+  static_assert(PointCloudOf<ObstacleMap<double>, 2>);
+  static_assert(PointCloudOf<StructureMap<float>, 2>);
+  for (const auto& b : obstacle.bins()) {
+    REQUIRE(b.dummy);
+    REQUIRE(b.range == obstacle.max_range());
+  }
+  StructureMap<double> structure(VirtualMapParams<double>{deg_to_rad(90.0), deg_to_rad(1.0)});
+  CHECK(structure.size() == 90);
+  CHECK(structure.bin(0).range == 0.0);
+  CHECK(structure.bin_bearing(0) == Approx(deg_to_rad(-44.5)));
+  CHECK(structure.bin_index(deg_to_rad(44.9)) == 89);
+  CHECK(structure.bin_index(deg_to_rad(45.1)) == structure.size());  // outside the aperture
+  // Both dummy kinds are invalid readings of the converted scan.
+  CHECK(obstacle.to_laser_scan().valid_count() == 0);
+  CHECK(structure.to_laser_scan().valid_count() == 0);
+  CHECK(obstacle.bin_index(pi) == 0);  // -pi and pi share the first bin of a full circle
+  CHECK(obstacle.bin_index(-pi + 1e-9) == 0);
+  CHECK(obstacle.bin_index(pi - 1e-9) == 719);
+}
+
+TEST_CASE("virtual map parameters are checked with exact messages", "[egocentric][virtual_map]") {
+  using P = VirtualMapParams<double>;
+  CHECK_THROWS_WITH(ObstacleMap<double>(P{0.0}),
+                    "rangenav: VirtualMap: argument 'aperture' = 0 must be finite and > 0");
+  CHECK_THROWS_WITH(ObstacleMap<double>(P{7.0}),
+                    "rangenav: VirtualMap: argument 'aperture' = 7 must be <= 2 pi");
+  CHECK_THROWS_WITH(ObstacleMap<double>(P{1.0, std::numeric_limits<double>::quiet_NaN()}),
+                    "rangenav: VirtualMap: argument 'resolution' = nan must be finite and > 0");
+  CHECK_THROWS_WITH(
+      ObstacleMap<double>(P{1.0, 2.0}),
+      "rangenav: VirtualMap: argument 'resolution' = 2 must not exceed the aperture 1");
+  CHECK_THROWS_WITH(ObstacleMap<double>(P{1.0, 0.1, -3.0}),
+                    "rangenav: VirtualMap: argument 'max_range' = -3 must be finite and > 0");
+}
+
+TEST_CASE("obstacle policy: nearest reading in the virtual corridor wins",
+          "[egocentric][virtual_map]") {
+  ObstacleMap<double> map(VirtualMapParams<double>{}, ObstacleMapPolicy{0.0, 1.0});
+  CHECK(map.insert(one(3.0, 0.0)) == 1);
+  CHECK(map.insert(one(4.0, 0.0)) == 0);  // farther: kept the nearer
+  CHECK(map.insert(one(2.0, 0.001)) == 1);
+  CHECK(map.insert(one(1.0, 0.0, 1.5)) == 0);   // above the corridor
+  CHECK(map.insert(one(1.0, 0.0, -0.1)) == 0);  // below it
+  CHECK(map.insert(one(31.0, 0.0)) == 0);       // beyond max range
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  CHECK(map.insert(std::vector<Point3d>{Point3d(nan, 0, 0.3), Point3d(0, 0, 0.3)}) == 0);
+  REQUIRE(map.valid_count() == 1);
+  const auto& b = map.bin(map.valid_indices()[0]);
+  CHECK(b.x == 2.0);
+  CHECK(b.range == Approx(std::hypot(2.0, 0.001)));
+  CHECK(b.bearing == Approx(std::atan2(0.001, 2.0)));
+  CHECK(b.z == 0.3);
+  CHECK(map.valid_indices()[0] == map.bin_index(0.0005));
+  CHECK(traits::point(map, 0) == Point2d(2.0, 0.001));
+  // The converted scan reads the stored range at the bin's centre bearing.
+  const auto scan = map.to_laser_scan();
+  REQUIRE(scan.size() == 720);
+  REQUIRE(scan.valid_count() == 1);
+  CHECK(scan.range(scan.valid_indices()[0]) == Approx(b.range));
+  CHECK(std::abs(scan.angle(scan.valid_indices()[0]) - b.bearing) <= map.resolution() / 2);
+}
+
+TEST_CASE("structure policy: farthest reading wins, max-range readings ignored",
+          "[egocentric][virtual_map]") {
+  StructureMap<double> map;
+  CHECK(map.insert(one(2.0, 0.0, 0.05)) == 1);  // floor points are fine: replaced later
+  CHECK(map.insert(one(5.0, 0.0, 1.8)) == 1);
+  CHECK(map.insert(one(3.0, 0.0, 0.5)) == 0);
+  CHECK(map.insert(one(30.0, 0.0)) == 0);  // max-range reading
+  REQUIRE(map.valid_count() == 1);
+  CHECK(map.valid_points()[0].x() == 5.0);
+}
+
+TEST_CASE("transformation keeps Cartesian and polar coordinates in step (Eq. 4)",
+          "[egocentric][virtual_map]") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-6.0, 6.0);
+  ObstacleMap<double> map;
+  std::vector<Point3d> pts;
+  for (int i = 0; i < 300; ++i)
+    pts.emplace_back(u(rng), u(rng), 0.5);
+  map.insert(pts);
+  const std::size_t before = map.valid_count();
+  Pose2d pose{1.0, -2.0, 0.3};  // the robot's world pose
+  const auto world_before = world_points(map, pose);
+  std::uniform_real_distribution<double> step(-0.05, 0.05);
+  std::size_t merged = 0;
+  for (int k = 0; k < 20; ++k) {
+    const Pose2d motion{step(rng), step(rng), 4 * step(rng)};
+    const auto st = map.transform(motion);
+    CHECK(st.aged_out == 0);
+    CHECK(st.moved == map.valid_count());
+    merged += st.merged;
+    pose = compose(pose, motion);
+  }
+  // The world positions of the surviving points are unchanged (within rounding) ...
+  const auto world_after = world_points(map, pose);
+  std::size_t matched = 0;
+  for (const auto& w : world_after)
+    for (const auto& v : world_before)
+      if ((w - v).norm() < 1e-9) {
+        ++matched;
+        break;
+      }
+  CHECK(matched == world_after.size());
+  CHECK(map.valid_count() + merged == before);  // only bin collisions removed points
+  // ... and every bin's polar coordinates describe its Cartesian point, inside that bin.
+  for (const std::uint32_t i : map.valid_indices()) {
+    const auto& b = map.bin(i);
+    REQUIRE(b.range == Approx(std::hypot(b.x, b.y)).epsilon(1e-12));
+    REQUIRE(std::abs(b.bearing - std::atan2(b.y, b.x)) < 1e-9);
+    REQUIRE(map.bin_index(b.bearing) == i);
+    REQUIRE(b.age == 20);
+  }
+}
+
+TEST_CASE("transformation closed form: drive forward, then turn left",
+          "[egocentric][virtual_map]") {
+  ObstacleMap<double> map;
+  map.insert(one(2.0, 0.0));
+  map.transform(Pose2d{0.5, 0.0, 0.0});
+  REQUIRE(map.valid_count() == 1);
+  CHECK(map.valid_points()[0].isApprox(Point2d(1.5, 0.0)));
+  CHECK(map.bin(map.valid_indices()[0]).range == Approx(1.5));
+  map.transform(Pose2d{0.0, 0.0, pi / 2});  // pure rotation: the object is now on the right
+  REQUIRE(map.valid_count() == 1);
+  const auto& b = map.bin(map.valid_indices()[0]);
+  CHECK(b.x == Approx(0.0).margin(1e-12));
+  CHECK(b.y == Approx(-1.5));
+  CHECK(b.bearing == Approx(-pi / 2));
+  CHECK(b.range == Approx(1.5));
+  CHECK(map.valid_indices()[0] == map.bin_index(-pi / 2 + 1e-6));
+}
+
+TEST_CASE("bin collisions after a transformation are resolved by the policy",
+          "[egocentric][virtual_map]") {
+  // A far point at 3 m and a near point in another bin; the robot moves 0.2 m to its left, after
+  // which the near point lies 1 m away along the far point's new bearing: one bin, two points.
+  const double a = deg_to_rad(10.25);
+  const Point2d far_before(3 * std::cos(a), 3 * std::sin(a));
+  const Point2d far_after = far_before - Point2d(0.0, 0.2);
+  const double b = std::atan2(far_after.y(), far_after.x());
+  const Point2d near_after(std::cos(b), std::sin(b));
+  const Point2d near_before = near_after + Point2d(0.0, 0.2);
+  const std::vector<Point3d> pts{Point3d(far_before.x(), far_before.y(), 0.3),
+                                 Point3d(near_before.x(), near_before.y(), 0.3)};
+  ObstacleMap<double> obstacle;
+  StructureMap<double> structure;
+  obstacle.insert(pts);
+  structure.insert(pts);
+  REQUIRE(obstacle.valid_count() == 2);
+  REQUIRE(structure.valid_count() == 2);
+  const auto so = obstacle.transform(Pose2d{0.0, 0.2, 0.0});
+  const auto ss = structure.transform(Pose2d{0.0, 0.2, 0.0});
+  CHECK(so.merged == 1);
+  CHECK(ss.merged == 1);
+  REQUIRE(obstacle.valid_count() == 1);
+  CHECK(obstacle.valid_points()[0].isApprox(near_after));
+  REQUIRE(structure.valid_count() == 1);
+  CHECK(structure.valid_points()[0].isApprox(far_after));
+}
+
+TEST_CASE("age-out: a point transformed more than max_age times becomes a dummy",
+          "[egocentric][virtual_map]") {
+  VirtualMapParams<double> params;
+  params.max_age = 5;
+  ObstacleMap<double> map(params);
+  map.insert(one(2.0, 1.0));
+  for (int i = 0; i < 5; ++i) {
+    const auto st = map.transform(Pose2d{0.001, 0.0, 0.0});
+    REQUIRE(st.aged_out == 0);
+  }
+  REQUIRE(map.valid_count() == 1);
+  CHECK(map.bin(map.valid_indices()[0]).age == 5);
+  // Standing still neither ages nor moves anything (steps 1 and 2 skipped).
+  const auto idle = map.transform(Pose2d{});
+  CHECK(idle.moved == 0);
+  CHECK(map.bin(map.valid_indices()[0]).age == 5);
+  const auto st = map.transform(Pose2d{0.001, 0.0, 0.0});
+  CHECK(st.aged_out == 1);
+  CHECK(map.valid_count() == 0);
+  // The freed bin is a dummy at max range again.
+  CHECK(map.bin(map.bin_index(std::atan2(1.0, 2.0 - 0.006))).range == map.max_range());
+  // A re-measured point starts at age 0.
+  map.update(Pose2d{0.001, 0.0, 0.0}, one(2.0, 1.0));
+  REQUIRE(map.valid_count() == 1);
+  CHECK(map.bin(map.valid_indices()[0]).age == 0);
+}
+
+TEST_CASE("restricted aperture drops points that leave it", "[egocentric][virtual_map]") {
+  ObstacleMap<double> map(VirtualMapParams<double>{deg_to_rad(60.0), deg_to_rad(1.0)});
+  CHECK(map.insert(one(2.0, 0.5)) == 1);
+  CHECK(map.insert(one(-2.0, 0.0)) == 0);  // behind: outside the aperture
+  const auto st = map.transform(Pose2d{0.0, 0.0, deg_to_rad(-40.0)});  // turn right
+  CHECK(st.merged == 1);
+  CHECK(map.valid_count() == 0);
+}
+
+TEST_CASE("2D scans insert through a planar mount", "[egocentric][virtual_map]") {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const LaserScand scan(-pi / 2, pi / 4, 0.05, 10.0, {1.0, 2.0, nan, 12.0, 3.0});
+  // Centred mount: bearings come from the scan, readings are at the mount's height.
+  ObstacleMap<double> centred;
+  CHECK(centred.insert(scan, PlanarMount<double>{Pose2d{0, 0, 0.1}, 0.3}) == 3);
+  for (const std::uint32_t i : centred.valid_indices()) {
+    const auto& b = centred.bin(i);
+    CHECK(b.z == 0.3);
+    CHECK(std::abs(b.bearing - std::atan2(b.y, b.x)) < 1e-12);
+  }
+  // Offset mount: same as inserting the transformed points by hand.
+  const PlanarMount<double> mount{Pose2d{0.2, -0.1, 0.3}, 0.25};
+  ObstacleMap<double> a, b;
+  a.insert(scan, mount);
+  std::vector<Point3d> by_hand;
+  for (const auto& p : scan.valid_points()) {
+    const Point2d q = mount.pose.transform_point(p);
+    by_hand.emplace_back(q.x(), q.y(), 0.25);
+  }
+  b.insert(by_hand);
+  REQUIRE(a.valid_count() == 3);
+  REQUIRE(a.valid_indices() == b.valid_indices());
+  for (std::size_t i = 0; i < a.valid_count(); ++i)
+    CHECK(a.valid_points()[i].isApprox(b.valid_points()[i]));
+  // A scan above the corridor is not admitted into an obstacle map.
+  ObstacleMap<double> high;
+  CHECK(high.insert(scan, PlanarMount<double>{Pose2d{}, 1.5}) == 0);
+}
+
+TEST_CASE("float maps behave like double maps", "[egocentric][virtual_map]") {
+  ObstacleMap<float> map;
+  map.insert(std::vector<Point3f>{Point3f(2.0f, 0.5f, 0.3f)});
+  map.transform(Pose2f{0.5f, 0.0f, 0.1f});
+  REQUIRE(map.valid_count() == 1);
+  const Point2f expected = inverse(Pose2f{0.5f, 0.0f, 0.1f}).transform_point(Point2f(2.0f, 0.5f));
+  CHECK(map.valid_points()[0].isApprox(expected, 1e-5f));
+  CHECK(map.to_laser_scan().valid_count() == 1);
+}

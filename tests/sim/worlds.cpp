@@ -1,0 +1,123 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "rangenav/sim/worlds.hpp"
+
+using namespace rangenav;
+using namespace rangenav::sim;
+
+TEST_CASE("apartment: the couch table is above the 2D scan plane, legs thin", "[sim][worlds]") {
+  const Scene s = apartment();
+  const SceneObject& table = s.object("couch_table");
+  CHECK(table.type == "table");
+  CHECK(table.max.z() == Approx(0.44));
+  CHECK(table.min.z() == Approx(0.0));
+  CHECK(table.parts.size() == 5);
+  CHECK(table.max.z() - 0.04 > apartment_scan_height);
+  // A beam at the scanner's height from (3, 3.4) towards -y passes between the legs and under the
+  // top, and hits the couch's front at y = 0.95.
+  const RayHit low = s.world.cast_ray_2d({3, 3.4}, {0, -1}, apartment_scan_height, 10);
+  REQUIRE(low.hit());
+  CHECK(s.object_of({low.kind, low.index})->name == "couch");
+  CHECK(low.range == Approx(3.4 - 0.95));
+  // At the top's height it hits the table's edge at y = 2.1.
+  const RayHit high = s.world.cast_ray_2d({3, 3.4}, {0, -1}, 0.42, 10);
+  REQUIRE(high.hit());
+  CHECK(s.object_of({high.kind, high.index})->name == "couch_table");
+  CHECK(high.range == Approx(3.4 - 2.1));
+}
+
+TEST_CASE("apartment: drawer overhang, small objects and the stair", "[sim][worlds]") {
+  const Scene s = apartment();
+  // The drawer sticks out 30 cm in front of the dresser above the scan plane.
+  const SceneObject& drawer = s.object("drawer");
+  const SceneObject& dresser = s.object("dresser");
+  CHECK(dresser.min.x() - drawer.min.x() == Approx(0.3));
+  CHECK(drawer.min.z() > apartment_scan_height);
+  const RayHit at_scan = s.world.cast_ray_2d({8.5, 3.5}, {1, 0}, apartment_scan_height, 10);
+  CHECK(s.object_of({at_scan.kind, at_scan.index})->name == "dresser");
+  CHECK(at_scan.range == Approx(1.0));
+  const RayHit at_drawer = s.world.cast_ray_2d({8.5, 3.5}, {1, 0}, 0.6, 10);
+  CHECK(s.object_of({at_drawer.kind, at_drawer.index})->name == "drawer");
+  CHECK(at_drawer.range == Approx(0.7));
+  // Every small object is 3-10 cm high and below the scan plane.
+  int small = 0;
+  for (const auto& o : s.objects)
+    if (o.type == "small_object") {
+      ++small;
+      CHECK(o.max.z() >= 0.03);
+      CHECK(o.max.z() <= 0.10);
+      CHECK(o.min.z() == 0.0);
+    }
+  CHECK(small >= 4);
+  // Looking straight down over the third step of the stair: its tread is 3 x 0.18 m below.
+  const SceneObject& stair = s.object("stair");
+  CHECK(stair.min.z() == Approx(-6 * 0.18));
+  const RayHit down = s.world.cast_ray({8.8, 7.2 + 2.5 * 0.28, 1.0}, {0, 0, -1}, 5);
+  CHECK(down.kind == SurfaceKind::hole);
+  CHECK(s.object_of({down.kind, down.index})->name == "stair");
+  CHECK(down.range == Approx(1.0 + 3 * 0.18));
+  // A 2D scanner in front of the stair looks over it and sees the stairwell's far wall.
+  const RayHit over = s.world.cast_ray_2d({8.8, 6.7}, {0, 1}, apartment_scan_height, 10);
+  CHECK(over.kind == SurfaceKind::wall);
+  CHECK(over.range == Approx(10 - 6.7));
+  // Doors exist with their states.
+  CHECK(s.world.doors().size() == 3);
+  CHECK(s.object("door_bathroom").parts[0].kind == SurfaceKind::door);
+  CHECK_THROWS_WITH(s.object("sofa"),
+                    "rangenav: Scene::object: argument 'name' = sofa names no object");
+}
+
+TEST_CASE("office corridor: door states decide what a beam sees", "[sim][worlds]") {
+  std::vector<double> open(office_corridor_door_count, 0.0);
+  open[1] = std::numbers::pi / 2;  // door_s1 at x = 7.5, open into the office
+  const Scene s = office_corridor(open);
+  CHECK(s.world.doors().size() == 8);
+  // Through door_s1's opening the beam reaches the office's far wall at y = -4.
+  const RayHit through = s.world.cast_ray_2d({7.5, 1.0}, {0, -1}, 1.0, 20);
+  CHECK(through.kind == SurfaceKind::wall);
+  CHECK(through.range == Approx(5.0));
+  // door_s2 (x = 12.5) is closed: the leaf, 2 cm thick on each side of y = 0.
+  const RayHit closed = s.world.cast_ray_2d({12.5, 1.0}, {0, -1}, 1.0, 20);
+  CHECK(closed.kind == SurfaceKind::door);
+  CHECK(s.object_of({closed.kind, closed.index})->name == "door_s2");
+  CHECK(closed.range == Approx(1.0 - 0.02));
+  // North doors open into +y.
+  open.assign(office_corridor_door_count, 0.0);
+  open[6] = 1.0;
+  const Scene n = office_corridor(open);
+  const Door& d = n.world.doors()[6];
+  CHECK(d.leaf().center.y() > 2.0);
+  CHECK_THROWS_WITH(
+      office_corridor({1.0}),
+      "rangenav: office_corridor: argument 'door_openings.size()' = 1 must be 0 or 8");
+}
+
+TEST_CASE("kitchen: rays hit the true planes", "[sim][worlds]") {
+  const Scene s = kitchen();
+  REQUIRE(s.planes.size() == 5);
+  const Point3d eye(4.2, 2.0, 1.4);
+  for (const auto& plane : s.planes) {
+    // Aim at the centre of each plane's outline; where the ray is not blocked it must end on it.
+    Point3d target = Point3d::Zero();
+    for (const auto& v : plane.outline)
+      target += v;
+    target /= static_cast<double>(plane.outline.size());
+    INFO(plane.name);
+    for (const auto& v : plane.outline)
+      CHECK(plane.signed_distance(v) == Approx(0.0).margin(1e-12));
+    if (plane.name == "wall" || plane.name == "floor" || plane.name == "table_top") continue;
+    const Point3d dir = (target - eye).normalized();
+    const RayHit h = s.world.cast_ray(eye, dir, 10);
+    REQUIRE(h.hit());
+    CHECK(plane.signed_distance(eye + h.range * dir) == Approx(0.0).margin(1e-9));
+  }
+  // The table top, seen from above next to the objects on it.
+  const RayHit t = s.world.cast_ray({2.2, 2.2, 1.5}, {0, 0, -1}, 5);
+  CHECK(s.object_of({t.kind, t.index})->name == "table");
+  CHECK(t.range == Approx(1.5 - 0.75));
+  // The floor beside the table.
+  CHECK(s.world.cast_ray({4.0, 0.5, 1.5}, {0, 0, -1}, 5).kind == SurfaceKind::floor);
+}
