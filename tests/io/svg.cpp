@@ -74,7 +74,7 @@ std::vector<double> numbers(const std::string& text) {
   std::vector<double> out;
   std::string cleaned = text;
   for (char& c : cleaned)
-    if (c == ',' || std::isalpha(static_cast<unsigned char>(c))) c = ' ';
+    if (c == ',' || c == '(' || c == ')' || std::isalpha(static_cast<unsigned char>(c))) c = ' ';
   std::istringstream in(cleaned);
   for (double v; in >> v;)
     out.push_back(v);
@@ -246,10 +246,12 @@ TEST_CASE("the scale bar is a round length with its label", "[io][svg]") {
     REQUIRE(!bar.empty());
     const auto path = tags_named(bar, "path");
     REQUIRE(path.size() == 1);
-    // d = "M x0 y0 V y1 M x0 y H x1 M x1 y0 V y1": the bar spans x0..x1.
+    // The footer is drawn in pixels: d = "M x0 y0 v8 M x0 y H x1 M x1 y0 v8", the bar spans
+    // x0..x1 pixels, which is c.bar metres at the drawing's scale.
+    const ViewBox vb = view_box(text);
     const auto v = numbers(attr(path[0], "d"));
     REQUIRE(v.size() == 9);
-    CHECK(v[5] - v[0] == Approx(c.bar).epsilon(2e-3));
+    CHECK((v[5] - v[0]) * vb.width / vb.width_px == Approx(c.bar).epsilon(2e-3));
     const auto label = tags_named(bar, "text");
     REQUIRE(label.size() == 1);
     CHECK(text_of(bar, label[0]) == c.label);
@@ -309,7 +311,14 @@ TEST_CASE("every shape becomes one element and non-finite points are skipped", "
   CHECK((arrow[4] - 1) * (arrow[8] - 1) < 0);  // barbs on both sides of the shaft,
   CHECK(-arrow[5] < 3);                        // behind the tip
   CHECK(-arrow[9] < 3);
-  CHECK(tags_named(content, "text").size() == 1);
+  const auto texts = tags_named(content, "text");
+  REQUIRE(texts.size() == 1);
+  // Text is placed in metres but sized in pixels: the content spans 9.8 m = 960 px.
+  const std::string transform = attr(texts[0], "transform");
+  CHECK(transform.rfind("translate(0 1) scale(", 0) == 0);
+  CHECK(numbers(transform.substr(transform.find("scale"))).at(0) == Approx(9.8 / 960));
+  CHECK(attr(texts[0], "font-size") == "14");
+  CHECK(text_of(content, texts[0]) == "hello");
   CHECK(tags_named(content, "line").size() == 1);
 }
 
@@ -378,21 +387,51 @@ TEST_CASE("layers group the shapes and the legend shows their colours", "[io][sv
   CHECK(tags_named(group(text, "robot"), "path").size() == 1);
   CHECK(group(text, "empty").find('<') == std::string::npos);
   // Legend: the named layers that hold shapes, each with its first shape's colour.
+  // A dot for points, a line for lines, a box for filled areas.
   const std::string legend = group(text, "legend");
   const auto swatches = tags_named(legend, "path");
+  const auto boxes = tags_named(legend, "rect");
   const auto labels = tags_named(legend, "text");
-  REQUIRE(swatches.size() == 3);
+  REQUIRE(swatches.size() == 2);
+  REQUIRE(boxes.size() == 1);
   REQUIRE(labels.size() == 3);
   CHECK(text_of(legend, labels[0]) == "map");
   CHECK(text_of(legend, labels[1]) == "robot");
   CHECK(text_of(legend, labels[2]) == "areas");
   CHECK(attr(swatches[0], "stroke") == "gray");
+  CHECK(attr(swatches[0], "d").ends_with("h0"));
   CHECK(attr(swatches[1], "stroke") == "crimson");
-  CHECK(attr(swatches[2], "stroke") == "green");  // no stroke: the fill
+  CHECK(attr(swatches[1], "d").ends_with("h16"));
+  CHECK(attr(boxes[0], "fill") == "green");
+  CHECK(attr(boxes[0], "stroke") == "none");
+  // A line layer without a stroke colour shows its fill.
+  SvgDrawing only_fill;
+  only_fill.layer("x").polyline(std::vector<Point2d>{{0, 0}, {1, 1}},
+                                {.stroke = "none", .fill = "teal"});
+  CHECK(attr(tags_named(group(only_fill.str(), "legend"), "path").at(0), "stroke") == "teal");
   // Without the legend there is no legend group.
   SvgDrawing quiet(SvgOptions{.legend = false});
   quiet.layer("map").circle({0, 0}, 1.0);
   CHECK(count(quiet.str(), "id=\"legend\"") == 0);
+}
+
+TEST_CASE("font sizes are written in pixels whatever the scale", "[io][svg]") {
+  // Renderers hint glyphs at the font size they are given: a font size of 0.1 user units (a
+  // drawing of a few metres) comes out garbled in librsvg, so no font size may be that small.
+  for (const double extent : {0.01, 1.0, 10.0, 1000.0, 1e5}) {
+    SvgDrawing svg;
+    svg.layer("a").segment({0, 0}, {extent, extent / 2});
+    svg.text({0, 0}, "label", 10);
+    const std::string text = svg.str();
+    require_well_formed(text);
+    std::size_t sizes = 0;
+    for (const Tag& t : tags(text)) {
+      if (attr(t, "font-size").empty()) continue;
+      CHECK(num_attr(t, "font-size") >= 10);
+      ++sizes;
+    }
+    CHECK(sizes == 2);  // the footer and the text
+  }
 }
 
 TEST_CASE("many legend entries wrap into rows below the drawing", "[io][svg]") {
@@ -409,7 +448,7 @@ TEST_CASE("many legend entries wrap into rows below the drawing", "[io][svg]") {
   const double drawing_px = 0.8 * 260 / 11.8 + 40;
   std::vector<double> rows;
   for (const Tag& label : labels) {
-    const Point2d px = pixel_of(vb, {num_attr(label, "x"), -num_attr(label, "y")});
+    const Point2d px(num_attr(label, "x"), num_attr(label, "y"));  // the footer is in pixels
     CHECK(px.x() >= 0);
     CHECK(px.x() + 7 * 15 <= vb.width_px);  // "layer number 11" fits in the picture
     CHECK(px.y() > drawing_px);

@@ -10,7 +10,9 @@
 // The file's user units are metres with y negated (SVG's y points down), so a coordinate read
 // in the file is the world coordinate, up to the sign of y; numbers are written with as many
 // decimals as a tenth of a pixel needs, which keeps a 100k-point drawing near 2 MB. Line widths,
-// point radii and font sizes are given in pixels and do not depend on the zoom.
+// point radii and font sizes are given in pixels and do not depend on the zoom. Text and the
+// footer are written in pixel units under a `translate(..) scale(1/pixels-per-metre)` transform:
+// renderers such as librsvg garble glyphs whose font size is a fraction of a user unit.
 //
 //   rangenav::io::SvgDrawing svg;
 //   svg.layer("map").points(map_cloud, {.stroke = "#444"});
@@ -335,14 +337,14 @@ class SvgDrawing {
     size(out, f, f.height_px);
     out += "\" font-family=\"sans-serif\" stroke-linecap=\"round\" stroke-linejoin=\"round\">\n";
     if (options_.background != "none") {
-      out += "<rect x=\"";
-      num(out, f, f.x0);
+      out += "<rect x=\"";  // exactly the view box
+      size(out, f, f.x0 * f.scale);
       out += "\" y=\"";
-      num(out, f, f.y0);
+      size(out, f, f.y0 * f.scale);
       out += "\" width=\"";
-      num(out, f, f.width_px / f.scale);
+      size(out, f, f.width_px);
       out += "\" height=\"";
-      num(out, f, f.height_px / f.scale);
+      size(out, f, f.height_px);
       out += "\" fill=\"";
       detail::append_escaped(out, options_.background);
       out += "\"/>\n";
@@ -678,10 +680,10 @@ class SvgDrawing {
         break;
       }
       case Kind::text: {
-        out += "<text";
-        xy_attr(out, f, e.pts[0], "x", "y");
+        out += "<text ";
+        pixel_frame(out, f, e.pts[0].x(), -e.pts[0].y());
         out += " font-size=\"";
-        size(out, f, e.value);
+        detail::append_number(out, e.value, 2);
         out += '"';
         paint(out, f, "none", s.fill != "none" ? s.fill : s.stroke, 0.0, s.opacity);
         out += '>';
@@ -692,23 +694,28 @@ class SvgDrawing {
     }
   }
 
+  // "translate(x y) scale(1/scale)": the frame of pixel-sized content (text, footer) placed at
+  // the user-space point (x, y). Renderers hint glyphs at the font size they are given, so text
+  // is never written with a font size of a fraction of a user unit.
+  void pixel_frame(std::string& out, const Frame& f, double x, double y) const {
+    out += "transform=\"translate(";
+    num(out, f, x);
+    out += ' ';
+    num(out, f, y);
+    out += ") scale(";
+    detail::append_number(out, 1.0 / f.scale, f.decimals + 5);
+    out += ")\"";
+  }
+
+  // The footer is drawn in pixels from the picture's top-left corner.
   void write_footer(std::string& out, const Frame& f) const {
-    const auto ux = [&](double x_px) { return f.x0 + x_px / f.scale; };
-    const auto uy = [&](double y_px) { return f.y0 + y_px / f.scale; };
-    const auto move_to = [&](std::string& to, char command, double x_px, double y_px) {
-      to += command;
-      num(to, f, ux(x_px));
-      to += ' ';
-      num(to, f, uy(y_px));
-    };
-    const auto text_at = [&](std::string& to, double x_px, double y_px, std::string_view content) {
+    const auto px = [](std::string& to, double v) { detail::append_number(to, v, 1); };
+    const auto text_at = [&](std::string& to, double x, double y, std::string_view content) {
       to += "<text x=\"";
-      num(to, f, ux(x_px));
+      px(to, x);
       to += "\" y=\"";
-      num(to, f, uy(y_px));
-      to += "\" font-size=\"";
-      size(to, f, font_px);
-      to += "\" fill=\"black\">";
+      px(to, y);
+      to += "\">";
       detail::append_escaped(to, content);
       to += "</text>\n";
     };
@@ -718,39 +725,69 @@ class SvgDrawing {
       if (l == scale_bar_slot) {
         // |------| with end ticks, then its label.
         const double x_end = x + f.scale_bar_m * f.scale;
-        scale_bar += "<path d=\"";
-        move_to(scale_bar, 'M', x, y - 4);
-        scale_bar += 'V';
-        num(scale_bar, f, uy(y + 4));
-        move_to(scale_bar, 'M', x, y);
+        scale_bar += "<path d=\"M";
+        px(scale_bar, x);
+        scale_bar += ' ';
+        px(scale_bar, y - 4);
+        scale_bar += "v8M";
+        px(scale_bar, x);
+        scale_bar += ' ';
+        px(scale_bar, y);
         scale_bar += 'H';
-        num(scale_bar, f, ux(x_end));
-        move_to(scale_bar, 'M', x_end, y - 4);
-        scale_bar += 'V';
-        num(scale_bar, f, uy(y + 4));
-        scale_bar += '"';
-        paint(scale_bar, f, "black", "none", 2.0, 1.0);
-        scale_bar += "/>\n";
+        px(scale_bar, x_end);
+        scale_bar += 'M';
+        px(scale_bar, x_end);
+        scale_bar += ' ';
+        px(scale_bar, y - 4);
+        scale_bar += "v8\" stroke=\"black\" stroke-width=\"2\" fill=\"none\"/>\n";
         text_at(scale_bar, x_end + 6, y + 4, detail::length_label(f.scale_bar_m));
         return;
       }
-      // A thick swatch in the colour of the layer's first shape, then the layer's name.
-      const Style& first = std::find_if(elements_.begin(), elements_.end(), [&](const Element& e) {
-                             return e.layer == l;
-                           })->style;
-      const std::string& colour =
-          first.stroke != "none" || first.fill == "none" ? first.stroke : first.fill;
-      legend += "<path d=\"";
-      move_to(legend, 'M', x, y);
-      legend += 'H';
-      num(legend, f, ux(x + 16));
-      legend += '"';
-      paint(legend, f, colour, "none", 4.0, 1.0);
+      // A swatch that looks like the layer's first shape: a dot for points, a filled box for
+      // filled areas, else a thick line; then the layer's name.
+      const Element& first = *std::find_if(elements_.begin(), elements_.end(),
+                                           [&](const Element& e) { return e.layer == l; });
+      const Style& style = first.style;
+      const bool area =
+          (first.kind == Kind::polygon || first.kind == Kind::circle) && style.fill != "none";
+      if (area) {
+        legend += "<rect x=\"";
+        px(legend, x + 1);
+        legend += "\" y=\"";
+        px(legend, y - 5);
+        legend += "\" width=\"14\" height=\"10\" fill=\"";
+        detail::append_escaped(legend, style.fill);
+        legend += "\" stroke=\"";
+        detail::append_escaped(legend, style.stroke);
+        legend += '"';
+      } else {
+        const bool dot = first.kind == Kind::points;
+        legend += "<path d=\"M";
+        px(legend, dot ? x + 8 : x);
+        legend += ' ';
+        px(legend, y);
+        legend += dot ? "h0" : "h16";
+        legend += "\" stroke=\"";
+        detail::append_escaped(legend, style.stroke != "none" ? style.stroke : style.fill);
+        legend += dot ? "\" stroke-width=\"7\"" : "\" stroke-width=\"4\"";
+        legend += " fill=\"none\"";
+      }
+      if (style.opacity < 1.0) {
+        legend += " opacity=\"";
+        detail::append_number(legend, std::max(style.opacity, 0.3), 3);
+        legend += '"';
+      }
       legend += "/>\n";
       text_at(legend, x + 22, y + 4, layers_[l].name);
     });
+    out += "<g id=\"footer\" ";
+    pixel_frame(out, f, f.x0, f.y0);
+    out += " font-size=\"";
+    px(out, font_px);
+    out += "\" fill=\"black\">\n";
     if (!scale_bar.empty()) out.append("<g id=\"scale-bar\">\n").append(scale_bar).append("</g>\n");
     if (!legend.empty()) out.append("<g id=\"legend\">\n").append(legend).append("</g>\n");
+    out += "</g>\n";
   }
 
   SvgOptions options_;

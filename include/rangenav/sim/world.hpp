@@ -247,10 +247,10 @@ class World {
     grid_max_ += Point2d::Constant(1e-6);
     const Point2d extent = grid_max_ - grid_min_;
     if (cell_size <= 0) {
-      // About two primitives' worth of cells each, but not finer than 0.25 m or coarser than 2 m.
+      // About four cells per primitive, but not finer than 0.25 m or coarser than 2 m.
       const double area = extent.x() * extent.y();
       cell_size =
-          std::clamp(std::sqrt(area / (2.0 * static_cast<double>(primitive_count()))), 0.25, 2.0);
+          std::clamp(std::sqrt(area / (4.0 * static_cast<double>(primitive_count()))), 0.25, 2.0);
     }
     constexpr double max_cells_per_axis = 4096;
     cell_size =

@@ -1,0 +1,165 @@
+#pragma once
+// Incremental registration with a sparse point map (paper 000 §3.2-3.3, paper 002 §6.3,
+// paper 004 §3.2), one code path for 2D scans (3-DOF) and 3D clouds (6-DOF):
+//   - the first scan D_0 is the map M_0; its frame is the map frame;
+//   - every later scan D_i is matched against M_{i-1} by ICP, with the initial guess
+//     T^_i = (last correction) ∘ (odometry increment) = T_{i-1} ∘ (o_{i-1}^-1 o_i);
+//   - a registration whose fitness (inlier fraction) is below `min_fitness` is rejected and the
+//     odometry guess kept (paper 004 §3.2), as are registrations that stopped for too few pairs;
+//   - every scan gets a pose (tracking); key frames (moved > 0.5 m or turned > 25°) are inserted
+//     into the sparse map by Eq. (5) of paper 000.
+// 3D clouds may be voxel-downsampled before matching (`voxel_size`, paper 004 §3.2).
+
+#include <algorithm>
+#include <concepts>
+#include <cstddef>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "rangenav/core/error.hpp"
+#include "rangenav/core/point_cloud.hpp"
+#include "rangenav/core/types.hpp"
+#include "rangenav/geometry/voxel_grid.hpp"
+#include "rangenav/mapping/key_frame.hpp"
+#include "rangenav/mapping/sparse_point_map.hpp"
+#include "rangenav/registration/icp.hpp"
+
+namespace rangenav {
+
+template <std::floating_point Scalar = double>
+struct IncrementalMapperParams {
+  KeyFrameParams<Scalar> key_frames{};
+  SparsePointMapParams<Scalar> map{};
+  /// Registrations with fitness (fraction of scan points matched within the final distance)
+  /// below this are rejected (paper 004 §3.2).
+  Scalar min_fitness = Scalar(0.3);
+  /// Final distance of the ICP's DecayingDistanceRejector (when it has one). It must exceed
+  /// eps_D: a scan point on a mapped wall is only guaranteed a map point within eps_D.
+  Scalar final_match_distance = Scalar(0.2);
+  /// Keep a registration the ICP reported degenerate (e.g. in a corridor): its constrained
+  /// directions still correct the odometry. When false the odometry guess is kept instead.
+  bool accept_degenerate = true;
+  /// Edge of the voxel filter applied to each scan before matching; 0 = no filter.
+  Scalar voxel_size = Scalar(0);
+
+  void validate() const {
+    key_frames.validate();
+    map.validate();
+    if (!(min_fitness >= Scalar(0) && min_fitness <= Scalar(1)))
+      detail::throw_invalid_argument("IncrementalMapperParams", "min_fitness", min_fitness,
+                                     "must be in [0, 1]");
+    detail::require_non_negative("IncrementalMapperParams", "voxel_size", voxel_size);
+    detail::require_positive("IncrementalMapperParams", "final_match_distance",
+                             final_match_distance);
+  }
+};
+
+/// What the mapper did with one scan.
+template <int D, class Scalar = double>
+struct MapperUpdate {
+  Transform<D, Scalar> pose;                ///< the scan's pose in the map frame
+  Transform<D, Scalar> initial_guess;       ///< the odometry-based guess it started from
+  std::optional<IcpResult<D, Scalar>> icp;  ///< absent for the first scan
+  bool registration_accepted = false;       ///< false: the pose is the odometry guess
+  bool key_frame = false;                   ///< the scan was inserted into the map
+  SparseInsertStats inserted{};
+};
+
+template <int D, std::floating_point Scalar = double, class IcpType = PaperIcp<D, Scalar>>
+class IncrementalMapper {
+ public:
+  using transform_type = Transform<D, Scalar>;
+  using point_type = Point<D, Scalar>;
+
+  IncrementalMapperParams<Scalar> params;
+  IcpType icp{};  ///< public typed policy: configure its rejectors and parameters directly
+
+  explicit IncrementalMapper(IncrementalMapperParams<Scalar> p = {})
+      : params(p), map_((p.validate(), p.map)), key_frames_(p.key_frames) {
+    if constexpr (requires { icp.template rejector<DecayingDistanceRejector<Scalar>>(); }) {
+      auto& decaying = icp.template rejector<DecayingDistanceRejector<Scalar>>();
+      decaying.final_distance = params.final_match_distance;
+      decaying.initial_distance = std::max(decaying.initial_distance, decaying.final_distance);
+    }
+  }
+
+  /// Processes one scan given in the robot frame, with the robot's odometry pose when known.
+  /// Without odometry the last correction alone is the initial guess (constant pose).
+  template <PointCloudOf<D> C>
+  MapperUpdate<D, Scalar> process(const C& scan,
+                                  const std::optional<transform_type>& odometry = std::nullopt) {
+    constexpr std::string_view where = "IncrementalMapper::process";
+    if (odometry && !is_rigid(*odometry, Scalar(std::is_same_v<Scalar, float> ? 1e-3 : 1e-6)))
+      detail::throw_invalid(where, "argument 'odometry' is not a finite rigid transform");
+    MapperUpdate<D, Scalar> update;
+    transform_type guess = pose_;
+    if (odometry && last_odometry_)
+      guess = pose_ * (last_odometry_->inverse(Eigen::Isometry) * *odometry);
+    if (odometry) last_odometry_ = *odometry;
+    update.initial_guess = guess;
+    update.pose = guess;
+
+    if (map_.empty()) {
+      // D_0 is the model M_0 (its frame is the map frame unless odometry was given before).
+      update.inserted = map_.insert(scan, guess);
+      if (!map_.empty()) {
+        key_frames_.accept(guess);
+        update.key_frame = true;
+        update.registration_accepted = true;
+      }
+      pose_ = guess;
+      ++scans_;
+      return update;
+    }
+
+    if (params.voxel_size > Scalar(0)) {
+      const auto filtered =
+          voxel_downsample(scan, static_cast<traits::scalar_t<C>>(params.voxel_size));
+      finite_.clear();
+      for (const auto& p : filtered)
+        finite_.push_back(p.template cast<Scalar>());
+    } else {
+      finite_.clear();
+      const std::size_t n = traits::size(scan);
+      for (std::size_t i = 0; i < n; ++i) {
+        const point_type p = traits::point(scan, i).template cast<Scalar>();
+        if (p.allFinite()) finite_.push_back(p);
+      }
+    }
+    if (finite_.empty()) {
+      pose_ = guess;
+      ++scans_;
+      return update;
+    }
+    update.icp = icp.align(map_.search(), finite_, guess);
+    const auto& r = *update.icp;
+    const bool usable = r.reason == IcpTermination::converged ||
+                        r.reason == IcpTermination::max_iterations ||
+                        (r.reason == IcpTermination::degenerate && params.accept_degenerate &&
+                         r.smallest_eigenvalue.has_value());
+    update.registration_accepted = usable && r.fitness >= params.min_fitness;
+    if (update.registration_accepted) update.pose = r.transform;
+    pose_ = update.pose;
+    if (update.registration_accepted && key_frames_.update(pose_)) {
+      update.inserted = map_.insert(scan, pose_);
+      update.key_frame = true;
+    }
+    ++scans_;
+    return update;
+  }
+
+  [[nodiscard]] const SparsePointMap<D, Scalar>& map() const { return map_; }
+  [[nodiscard]] const transform_type& pose() const { return pose_; }
+  [[nodiscard]] std::size_t scans_processed() const { return scans_; }
+
+ private:
+  SparsePointMap<D, Scalar> map_;
+  KeyFrameSelector<D, Scalar> key_frames_;
+  transform_type pose_ = transform_type::Identity();
+  std::optional<transform_type> last_odometry_;
+  std::size_t scans_ = 0;
+  std::vector<point_type> finite_;
+};
+
+}  // namespace rangenav

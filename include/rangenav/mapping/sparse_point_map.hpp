@@ -1,0 +1,150 @@
+#pragma once
+// Sparse point maps (paper 000 §3.3, Eq. (5); paper 002 §6.3, Eq. (12)): a registered point is
+// added to the map only when no stored point lies within eps_D of it,
+//   M_i = M_{i-1} ∪ { d | d ∈ D_i, ∄ m ∈ M_{i-1} : |d - m| < eps_D },
+// which bounds the point density of the map. The test runs on the same kd-tree the ICP searches
+// (a GrowingKdTree, so the map is directly an ICP model).
+//
+// Eq. (5) only compares with the map before the scan; by default the new points are also
+// thinned among themselves (deduplicate_within_scan), so that one dense scan does not store
+// several points per eps_D ball. Set it to false for the literal Eq. (5).
+//
+// Memory: one stored point costs sizeof(Point<D, Scalar>) (16 B in 2D, 24 B in 3D for double)
+// plus the kd-tree's index (4 B) and nodes (about 2 nodes of ~40-60 B per 10-point leaf), i.e.
+// about 30 B per point in 2D; memory_bytes() reports the exact figure.
+
+#include <cmath>
+#include <concepts>
+#include <cstddef>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "rangenav/core/error.hpp"
+#include "rangenav/core/point_cloud.hpp"
+#include "rangenav/core/types.hpp"
+#include "rangenav/search/kd_tree.hpp"
+
+namespace rangenav {
+
+template <std::floating_point Scalar = double>
+struct SparsePointMapParams {
+  Scalar epsilon_d = Scalar(0.15);  ///< m, eps_D of Eq. (5); paper 000 Fig. 3 uses 15 cm
+  bool deduplicate_within_scan = true;
+  KdTreeParams tree{};
+
+  void validate() const { detail::require_positive("SparsePointMap", "epsilon_d", epsilon_d); }
+};
+
+/// What one insertion did.
+struct SparseInsertStats {
+  std::size_t offered = 0;  ///< finite points offered
+  std::size_t stored = 0;   ///< points added to the map
+};
+
+template <int D, std::floating_point Scalar = double>
+class SparsePointMap {
+ public:
+  static constexpr int dimension = D;
+  using scalar_type = Scalar;
+  using point_type = Point<D, Scalar>;
+  using transform_type = Transform<D, Scalar>;
+
+  /// Throws invalid_argument when epsilon_d is not finite and > 0.
+  explicit SparsePointMap(SparsePointMapParams<Scalar> params = {})
+      : params_(params), tree_(params.tree) {
+    params_.validate();
+  }
+
+  /// Transforms the points of `cloud` by `pose` (cloud frame -> map frame) and stores those with
+  /// no map point within eps_D (Eq. (5)). Throws invalid_argument for a non-rigid pose.
+  template <PointCloudOf<D> C>
+  SparseInsertStats insert(const C& cloud,
+                           const transform_type& pose = transform_type::Identity()) {
+    if (!is_rigid(pose, Scalar(std::is_same_v<Scalar, float> ? 1e-3 : 1e-6)))
+      detail::throw_invalid("SparsePointMap::insert",
+                            "argument 'pose' is not a finite rigid transform");
+    const Scalar eps_sq = params_.epsilon_d * params_.epsilon_d;
+    SparseInsertStats stats;
+    candidates_.clear();
+    const std::size_t n = traits::size(cloud);
+    for (std::size_t i = 0; i < n; ++i) {
+      const point_type p = pose * traits::point(cloud, i).template cast<Scalar>();
+      if (!p.allFinite()) continue;
+      ++stats.offered;
+      if (!tree_.nearest(p, eps_sq)) candidates_.push_back(p);
+    }
+    if (params_.deduplicate_within_scan) thin_candidates(eps_sq);
+    stats.stored = candidates_.size();
+    if (!candidates_.empty()) tree_.insert(candidates_);
+    offered_ += stats.offered;
+    return stats;
+  }
+
+  /// The map as a search structure (an ICP model).
+  [[nodiscard]] const GrowingKdTree<D, Scalar>& search() const { return tree_; }
+  [[nodiscard]] const std::vector<point_type>& points() const { return tree_.points(); }
+  [[nodiscard]] std::size_t size() const { return tree_.size(); }
+  [[nodiscard]] bool empty() const { return tree_.empty(); }
+  /// Finite points offered to insert() so far.
+  [[nodiscard]] std::size_t points_offered() const { return offered_; }
+  /// Bytes held by the stored points and the search structure.
+  [[nodiscard]] std::size_t memory_bytes() const { return tree_.memory_bytes(); }
+  [[nodiscard]] const SparsePointMapParams<Scalar>& params() const { return params_; }
+
+ private:
+  // Greedy thinning of the candidates among themselves on a hashed grid of cell eps_D: a
+  // candidate is kept when no kept candidate in the 3^D surrounding cells is within eps_D.
+  void thin_candidates(Scalar eps_sq) {
+    if (candidates_.size() < 2) return;
+    grid_.clear();
+    kept_.clear();
+    next_.clear();
+    const Scalar inv = Scalar(1) / params_.epsilon_d;
+    const auto cell_of = [&](const point_type& p) {
+      Eigen::Matrix<std::int64_t, D, 1> c;
+      for (int d = 0; d < D; ++d)
+        c[d] = static_cast<std::int64_t>(std::floor(p[d] * inv));
+      return c;
+    };
+    const auto key_of = [](const Eigen::Matrix<std::int64_t, D, 1>& c) {
+      std::uint64_t key = 0;
+      for (int d = 0; d < D; ++d)
+        key = key * 0x9E3779B97F4A7C15ull + static_cast<std::uint64_t>(c[d]);
+      return key;
+    };
+    for (const point_type& p : candidates_) {
+      const auto c = cell_of(p);
+      bool near = false;
+      for (int offset = 0; offset < (D == 2 ? 9 : 27) && !near; ++offset) {
+        Eigen::Matrix<std::int64_t, D, 1> nc = c;
+        int o = offset;
+        for (int d = 0; d < D; ++d, o /= 3)
+          nc[d] += o % 3 - 1;
+        const auto it = grid_.find(key_of(nc));
+        for (std::uint32_t k = it == grid_.end() ? UINT32_MAX : it->second; k != UINT32_MAX;
+             k = next_[k])
+          if ((kept_[k] - p).squaredNorm() < eps_sq) {
+            near = true;
+            break;
+          }
+      }
+      if (near) continue;
+      const auto key = key_of(c);
+      const auto [it, fresh] = grid_.try_emplace(key, static_cast<std::uint32_t>(kept_.size()));
+      next_.push_back(fresh ? UINT32_MAX : it->second);
+      if (!fresh) it->second = static_cast<std::uint32_t>(kept_.size());
+      kept_.push_back(p);
+    }
+    candidates_.swap(kept_);
+  }
+
+  SparsePointMapParams<Scalar> params_;
+  GrowingKdTree<D, Scalar> tree_;
+  std::size_t offered_ = 0;
+  std::vector<point_type> candidates_, kept_;
+  std::unordered_map<std::uint64_t, std::uint32_t> grid_;
+  std::vector<std::uint32_t> next_;
+};
+
+}  // namespace rangenav

@@ -1,0 +1,325 @@
+#pragma once
+// kd-trees behind the NearestNeighborSearch concept, built with nanoflann.
+//
+// KdTree<D, Scalar>        a static index over one cloud (the ICP model of a scan-to-scan match).
+// GrowingKdTree<D, Scalar> an index that points are appended to (a growing map). Appended batches
+//                          form a short chain of static trees over contiguous index ranges whose
+//                          sizes at least halve along the chain; a new batch merges (rebuilds)
+//                          the tail of the chain while that keeps the halving rule (Bentley-Saxe
+//                          logarithmic method). Each point is rebuilt O(log n) times, a query
+//                          visits at most log2(n) trees largest first, and one collector runs over
+//                          all of them so the first tree's answer bounds the others.
+//
+// Both copy the finite points of their input into one contiguous array (non-finite points, e.g.
+// invalid beams of a LaserScan, are skipped; source_index(i) maps back). Queries are const and
+// thread-safe; insert() is not.
+
+#include <nanoflann.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "rangenav/core/error.hpp"
+#include "rangenav/core/point_cloud.hpp"
+#include "rangenav/core/types.hpp"
+#include "rangenav/search/nearest_neighbor_search.hpp"
+
+namespace rangenav {
+
+/// Build parameters of the kd-trees.
+struct KdTreeParams {
+  /// Maximum number of points in a leaf (nanoflann's leaf_max_size): smaller leaves mean faster
+  /// queries and slower builds. 10 is nanoflann's default.
+  std::size_t leaf_max_size = 10;
+};
+
+namespace detail {
+
+/// nanoflann dataset adaptor over a contiguous range of Eigen points (zero-copy view).
+template <int D, class Scalar>
+struct PointRangeAdaptor {
+  const Point<D, Scalar>* data = nullptr;
+  std::size_t count = 0;
+
+  [[nodiscard]] std::size_t kdtree_get_point_count() const { return count; }
+  [[nodiscard]] Scalar kdtree_get_pt(std::uint32_t i, std::size_t dim) const {
+    return data[i][static_cast<Eigen::Index>(dim)];
+  }
+  template <class BoundingBox>
+  bool kdtree_get_bbox(BoundingBox&) const {
+    return false;
+  }
+};
+
+/// One static nanoflann tree over points [offset, offset + count) of an external array.
+template <int D, class Scalar>
+class RangeTree {
+ public:
+  using Adaptor = PointRangeAdaptor<D, Scalar>;
+  using Index = nanoflann::KDTreeSingleIndexAdaptor<
+      nanoflann::L2_Simple_Adaptor<Scalar, Adaptor, Scalar, std::uint32_t>, Adaptor, D,
+      std::uint32_t>;
+
+  RangeTree(const Point<D, Scalar>* data, std::size_t offset, std::size_t count,
+            const KdTreeParams& params)
+      : offset_(offset), adaptor_{data + offset, count} {
+    index_ = std::make_unique<Index>(D, adaptor_,
+                                     nanoflann::KDTreeSingleIndexAdaptorParams(
+                                         params.leaf_max_size < 1 ? 1 : params.leaf_max_size));
+  }
+  RangeTree(const RangeTree&) = delete;
+  RangeTree& operator=(const RangeTree&) = delete;
+
+  /// The points moved (the owning vector reallocated): the tree's structure is unchanged.
+  void rebase(const Point<D, Scalar>* data) { adaptor_.data = data + offset_; }
+
+  [[nodiscard]] std::size_t offset() const { return offset_; }
+  /// Bytes held by the tree structure (nodes and index array), not the points.
+  [[nodiscard]] std::size_t memory_bytes() const {
+    return static_cast<std::size_t>(index_->usedMemory(*index_));
+  }
+  [[nodiscard]] std::size_t size() const { return adaptor_.count; }
+
+  /// Runs a result collector; indices it receives are local to this tree.
+  template <class Collector>
+  void search(Collector& collector, const Point<D, Scalar>& q) const {
+    if (adaptor_.count == 0) return;
+    index_->findNeighbors(collector, q.data(), nanoflann::SearchParams(32, 0.0f, false));
+  }
+
+ private:
+  std::size_t offset_;
+  Adaptor adaptor_;
+  std::unique_ptr<Index> index_;
+};
+
+/// Collector decorator that shifts a tree's local indices by its offset.
+template <class Inner>
+struct OffsetCollector {
+  Inner& inner;
+  std::uint32_t offset;
+  [[nodiscard]] auto worstDist() const { return inner.worstDist(); }
+  template <class Scalar>
+  bool addPoint(Scalar distance_sq, std::uint32_t index) {
+    return inner.addPoint(distance_sq, index + offset);
+  }
+  [[nodiscard]] bool full() const { return inner.full(); }
+};
+
+template <int D, class Scalar, PointCloud C>
+void append_finite(const C& cloud, std::vector<Point<D, Scalar>>& points,
+                   std::vector<std::uint32_t>& source, bool& has_gaps, std::size_t source_base) {
+  const std::size_t n = traits::size(cloud);
+  points.reserve(points.size() + n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Point<D, Scalar> p = traits::point(cloud, i).template cast<Scalar>();
+    if (!p.allFinite()) {
+      if (!has_gaps) {
+        has_gaps = true;
+        source.resize(points.size());
+        for (std::size_t j = 0; j < source.size(); ++j)
+          source[j] = static_cast<std::uint32_t>(j);
+      }
+      continue;
+    }
+    if (has_gaps) source.push_back(static_cast<std::uint32_t>(source_base + i));
+    points.push_back(p);
+  }
+}
+
+}  // namespace detail
+
+/// A static kd-tree over the finite points of a cloud. Models NearestNeighborSearch.
+template <int D, class Scalar = double>
+class KdTree {
+ public:
+  static_assert(D == 2 || D == 3, "KdTree: dimension must be 2 or 3");
+  static constexpr int dimension = D;
+  using scalar_type = Scalar;
+  using point_type = Point<D, Scalar>;
+
+  KdTree() = default;
+
+  /// Indexes the finite points of `cloud` (converted to Scalar).
+  template <PointCloudOf<D> C>
+  explicit KdTree(const C& cloud, KdTreeParams params = {}) : params_(params) {
+    detail::append_finite<D, Scalar>(cloud, points_, source_, has_gaps_, 0);
+    build();
+  }
+
+  /// Takes ownership of a point array (no copy); non-finite points are not allowed here.
+  explicit KdTree(std::vector<point_type>&& points, KdTreeParams params = {})
+      : points_(std::move(points)), params_(params) {
+    for (std::size_t i = 0; i < points_.size(); ++i)
+      if (!points_[i].allFinite())
+        detail::throw_invalid_argument("KdTree", "points[" + std::to_string(i) + "]",
+                                       "(non-finite)", "must be finite");
+    build();
+  }
+
+  KdTree(KdTree&&) noexcept = default;
+  KdTree& operator=(KdTree&&) noexcept = default;
+
+  [[nodiscard]] std::size_t size() const { return points_.size(); }
+  [[nodiscard]] bool empty() const { return points_.empty(); }
+  [[nodiscard]] const point_type& point(std::size_t i) const { return points_[i]; }
+  [[nodiscard]] const std::vector<point_type>& points() const { return points_; }
+  /// The index in the input cloud of stored point i.
+  [[nodiscard]] std::size_t source_index(std::size_t i) const { return has_gaps_ ? source_[i] : i; }
+
+  [[nodiscard]] std::optional<Neighbor<Scalar>> nearest(
+      const point_type& q, Scalar max_distance_sq = unbounded_sq<Scalar>) const {
+    detail::NearestCollector<Scalar> c(max_distance_sq);
+    if (tree_) tree_->search(c, q);
+    return c.result();
+  }
+
+  std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
+                  Scalar max_distance_sq = unbounded_sq<Scalar>) const {
+    out.resize(k);
+    if (k == 0) return 0;
+    detail::KnnCollector<Scalar> c(out.data(), k, max_distance_sq);
+    if (tree_) tree_->search(c, q);
+    out.resize(c.size());
+    return out.size();
+  }
+
+  std::size_t radius(const point_type& q, Scalar radius_sq,
+                     std::vector<Neighbor<Scalar>>& out) const {
+    out.clear();
+    detail::RadiusCollector<Scalar> c(out, radius_sq);
+    if (tree_) tree_->search(c, q);
+    detail::sort_by_distance(out);
+    return out.size();
+  }
+
+ private:
+  void build() {
+    if (points_.empty()) return;
+    tree_ =
+        std::make_unique<detail::RangeTree<D, Scalar>>(points_.data(), 0, points_.size(), params_);
+  }
+
+  std::vector<point_type> points_;
+  std::vector<std::uint32_t> source_;
+  bool has_gaps_ = false;
+  KdTreeParams params_{};
+  std::unique_ptr<detail::RangeTree<D, Scalar>> tree_;
+};
+
+/// A kd-tree that points are appended to, with amortised O(log n) rebuilds per point (see the
+/// file comment). Models NearestNeighborSearch; indices are stable (insertion order).
+template <int D, class Scalar = double>
+class GrowingKdTree {
+ public:
+  static_assert(D == 2 || D == 3, "GrowingKdTree: dimension must be 2 or 3");
+  static constexpr int dimension = D;
+  using scalar_type = Scalar;
+  using point_type = Point<D, Scalar>;
+
+  explicit GrowingKdTree(KdTreeParams params = {}) : params_(params) {}
+  GrowingKdTree(GrowingKdTree&&) noexcept = default;
+  GrowingKdTree& operator=(GrowingKdTree&&) noexcept = default;
+
+  /// Appends the finite points of a cloud (one batch); returns how many were appended.
+  template <PointCloudOf<D> C>
+  std::size_t insert(const C& cloud) {
+    const std::size_t before = points_.size();
+    const std::size_t n = traits::size(cloud);
+    points_.reserve(before + n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const point_type p = traits::point(cloud, i).template cast<Scalar>();
+      if (p.allFinite()) points_.push_back(p);
+    }
+    commit(before);
+    return points_.size() - before;
+  }
+
+  /// Appends one point (non-finite points are ignored). Prefer batches: each call is a batch.
+  bool insert_point(const point_type& p) {
+    if (!p.allFinite()) return false;
+    const std::size_t before = points_.size();
+    points_.push_back(p);
+    commit(before);
+    return true;
+  }
+
+  void reserve(std::size_t n) { points_.reserve(n); }
+  void clear() {
+    trees_.clear();
+    points_.clear();
+  }
+
+  [[nodiscard]] std::size_t size() const { return points_.size(); }
+  [[nodiscard]] bool empty() const { return points_.empty(); }
+  [[nodiscard]] const point_type& point(std::size_t i) const { return points_[i]; }
+  [[nodiscard]] const std::vector<point_type>& points() const { return points_; }
+  /// Bytes held: the point array plus every tree's nodes and index array.
+  [[nodiscard]] std::size_t memory_bytes() const {
+    std::size_t bytes = points_.capacity() * sizeof(point_type);
+    for (const auto& tree : trees_)
+      bytes += tree->memory_bytes();
+    return bytes;
+  }
+  /// Number of static trees in the chain (at most log2(size) + 1).
+  [[nodiscard]] std::size_t tree_count() const { return trees_.size(); }
+
+  [[nodiscard]] std::optional<Neighbor<Scalar>> nearest(
+      const point_type& q, Scalar max_distance_sq = unbounded_sq<Scalar>) const {
+    detail::NearestCollector<Scalar> c(max_distance_sq);
+    search_all(c, q);
+    return c.result();
+  }
+
+  std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
+                  Scalar max_distance_sq = unbounded_sq<Scalar>) const {
+    out.resize(k);
+    if (k == 0) return 0;
+    detail::KnnCollector<Scalar> c(out.data(), k, max_distance_sq);
+    search_all(c, q);
+    out.resize(c.size());
+    return out.size();
+  }
+
+  std::size_t radius(const point_type& q, Scalar radius_sq,
+                     std::vector<Neighbor<Scalar>>& out) const {
+    out.clear();
+    detail::RadiusCollector<Scalar> c(out, radius_sq);
+    search_all(c, q);
+    detail::sort_by_distance(out);
+    return out.size();
+  }
+
+ private:
+  template <class Collector>
+  void search_all(Collector& c, const point_type& q) const {
+    for (const auto& tree : trees_) {
+      detail::OffsetCollector<Collector> shifted{c, static_cast<std::uint32_t>(tree->offset())};
+      tree->search(shifted, q);
+    }
+  }
+
+  void commit(std::size_t before) {
+    if (points_.size() == before) return;
+    // Merge the chain's tail with the new batch while the halving rule would break.
+    std::size_t start = before;
+    while (!trees_.empty() && trees_.back()->size() < 2 * (points_.size() - start)) {
+      start = trees_.back()->offset();
+      trees_.pop_back();
+    }
+    for (auto& tree : trees_)
+      tree->rebase(points_.data());
+    trees_.push_back(std::make_unique<detail::RangeTree<D, Scalar>>(
+        points_.data(), start, points_.size() - start, params_));
+  }
+
+  std::vector<point_type> points_;
+  KdTreeParams params_{};
+  std::vector<std::unique_ptr<detail::RangeTree<D, Scalar>>> trees_;
+};
+
+}  // namespace rangenav

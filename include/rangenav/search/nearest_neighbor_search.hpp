@@ -1,0 +1,195 @@
+#pragma once
+// The NearestNeighborSearch concept, its result type, and a brute-force reference model.
+//
+// A search structure indexes a set of D-dimensional points and answers three queries; every
+// distance it reports or takes is SQUARED (named `*_sq`) and every bound is strict:
+//   nearest(q, max_distance_sq)   the closest point with distance_sq < max_distance_sq, if any.
+//                                 The bound prunes the search (ICP passes its rejection radius).
+//   knn(q, k, out, max_distance_sq = inf)   the k closest points, ascending; returns the count.
+//   radius(q, radius_sq, out)     all points with distance_sq < radius_sq, ascending.
+// `out` is a caller-owned buffer that is cleared and refilled, so a loop of queries allocates
+// nothing once the buffer has grown. Indices refer to the structure's own point list: point(i).
+// Queries are const and may run concurrently from several threads; mutation (insert) may not.
+
+#include <algorithm>
+#include <concepts>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <vector>
+
+#include "rangenav/core/point_cloud.hpp"
+#include "rangenav/core/types.hpp"
+
+namespace rangenav {
+
+/// One query answer: the index of a stored point and its squared distance to the query.
+template <class Scalar>
+struct Neighbor {
+  std::uint32_t index = 0;
+  Scalar distance_sq = 0;
+  friend bool operator==(const Neighbor&, const Neighbor&) = default;
+};
+
+/// +infinity, the "no bound" value of every `max_distance_sq` argument.
+template <class Scalar>
+inline constexpr Scalar unbounded_sq = std::numeric_limits<Scalar>::infinity();
+
+// clang-format off
+/// A nearest-neighbour index over points of dimension S::dimension and scalar S::scalar_type.
+template <class S>
+concept NearestNeighborSearch =
+    requires { { S::dimension } -> std::convertible_to<int>; typename S::scalar_type; } &&
+    requires(const S& s, const Point<S::dimension, typename S::scalar_type>& q, std::size_t k,
+             typename S::scalar_type bound_sq,
+             std::vector<Neighbor<typename S::scalar_type>>& out) {
+      { s.size() } -> std::convertible_to<std::size_t>;
+      { s.point(std::size_t{}) } -> std::convertible_to<Point<S::dimension, typename S::scalar_type>>;
+      { s.nearest(q, bound_sq) } -> std::same_as<std::optional<Neighbor<typename S::scalar_type>>>;
+      { s.knn(q, k, out) } -> std::convertible_to<std::size_t>;
+      { s.knn(q, k, out, bound_sq) } -> std::convertible_to<std::size_t>;
+      { s.radius(q, bound_sq, out) } -> std::convertible_to<std::size_t>;
+    };
+// clang-format on
+
+namespace detail {
+
+/// Keeps the k best (index, distance_sq) pairs in ascending order inside a caller's buffer; also
+/// the result-set protocol of nanoflann (worstDist / addPoint / full), so one collector can run
+/// over several trees and the bound shrinks across them.
+template <class Scalar>
+class KnnCollector {
+ public:
+  KnnCollector(Neighbor<Scalar>* data, std::size_t capacity, Scalar bound_sq)
+      : data_(data), capacity_(capacity), bound_sq_(bound_sq) {}
+
+  [[nodiscard]] Scalar worstDist() const {
+    return count_ == capacity_ ? data_[capacity_ - 1].distance_sq : bound_sq_;
+  }
+  bool addPoint(Scalar distance_sq, std::uint32_t index) {
+    if (!(distance_sq < worstDist())) return true;
+    std::size_t i = count_ < capacity_ ? count_++ : capacity_ - 1;
+    for (; i > 0 && data_[i - 1].distance_sq > distance_sq; --i)
+      data_[i] = data_[i - 1];
+    data_[i] = {index, distance_sq};
+    return true;
+  }
+  [[nodiscard]] bool full() const { return count_ == capacity_; }
+  [[nodiscard]] std::size_t size() const { return count_; }
+
+ private:
+  Neighbor<Scalar>* data_;
+  std::size_t capacity_;
+  std::size_t count_ = 0;
+  Scalar bound_sq_;
+};
+
+/// The single closest point under a strict bound (nanoflann result-set protocol).
+template <class Scalar>
+class NearestCollector {
+ public:
+  explicit NearestCollector(Scalar bound_sq) : best_{0, bound_sq} {}
+  [[nodiscard]] Scalar worstDist() const { return best_.distance_sq; }
+  bool addPoint(Scalar distance_sq, std::uint32_t index) {
+    if (distance_sq < best_.distance_sq) {
+      best_ = {index, distance_sq};
+      found_ = true;
+    }
+    return true;
+  }
+  [[nodiscard]] bool full() const { return true; }
+  [[nodiscard]] std::optional<Neighbor<Scalar>> result() const {
+    return found_ ? std::optional<Neighbor<Scalar>>(best_) : std::nullopt;
+  }
+
+ private:
+  Neighbor<Scalar> best_;
+  bool found_ = false;
+};
+
+/// Every point under a strict bound (nanoflann result-set protocol); sort afterwards.
+template <class Scalar>
+class RadiusCollector {
+ public:
+  RadiusCollector(std::vector<Neighbor<Scalar>>& out, Scalar radius_sq)
+      : out_(out), radius_sq_(radius_sq) {}
+  [[nodiscard]] Scalar worstDist() const { return radius_sq_; }
+  bool addPoint(Scalar distance_sq, std::uint32_t index) {
+    if (distance_sq < radius_sq_) out_.push_back({index, distance_sq});
+    return true;
+  }
+  [[nodiscard]] bool full() const { return true; }
+
+ private:
+  std::vector<Neighbor<Scalar>>& out_;
+  Scalar radius_sq_;
+};
+
+template <class Scalar>
+void sort_by_distance(std::vector<Neighbor<Scalar>>& out) {
+  std::sort(out.begin(), out.end(), [](const Neighbor<Scalar>& a, const Neighbor<Scalar>& b) {
+    return a.distance_sq < b.distance_sq || (a.distance_sq == b.distance_sq && a.index < b.index);
+  });
+}
+
+}  // namespace detail
+
+/// Exhaustive search: the reference the kd-trees are tested against, and the fastest choice for
+/// a few dozen points. Non-finite points of the input are skipped (source_index maps back).
+template <int D, class Scalar = double>
+class BruteForceSearch {
+ public:
+  static constexpr int dimension = D;
+  using scalar_type = Scalar;
+  using point_type = Point<D, Scalar>;
+
+  BruteForceSearch() = default;
+  template <PointCloudOf<D> C>
+  explicit BruteForceSearch(const C& cloud) {
+    const std::size_t n = traits::size(cloud);
+    for (std::size_t i = 0; i < n; ++i) {
+      const point_type p = traits::point(cloud, i).template cast<Scalar>();
+      if (!p.allFinite()) continue;
+      points_.push_back(p);
+      source_.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+
+  [[nodiscard]] std::size_t size() const { return points_.size(); }
+  [[nodiscard]] const point_type& point(std::size_t i) const { return points_[i]; }
+  [[nodiscard]] std::size_t source_index(std::size_t i) const { return source_[i]; }
+
+  [[nodiscard]] std::optional<Neighbor<Scalar>> nearest(
+      const point_type& q, Scalar max_distance_sq = unbounded_sq<Scalar>) const {
+    detail::NearestCollector<Scalar> c(max_distance_sq);
+    for (std::size_t i = 0; i < points_.size(); ++i)
+      c.addPoint((points_[i] - q).squaredNorm(), static_cast<std::uint32_t>(i));
+    return c.result();
+  }
+  std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
+                  Scalar max_distance_sq = unbounded_sq<Scalar>) const {
+    out.resize(k);
+    if (k == 0) return 0;
+    detail::KnnCollector<Scalar> c(out.data(), k, max_distance_sq);
+    for (std::size_t i = 0; i < points_.size(); ++i)
+      c.addPoint((points_[i] - q).squaredNorm(), static_cast<std::uint32_t>(i));
+    out.resize(c.size());
+    return out.size();
+  }
+  std::size_t radius(const point_type& q, Scalar radius_sq,
+                     std::vector<Neighbor<Scalar>>& out) const {
+    out.clear();
+    detail::RadiusCollector<Scalar> c(out, radius_sq);
+    for (std::size_t i = 0; i < points_.size(); ++i)
+      c.addPoint((points_[i] - q).squaredNorm(), static_cast<std::uint32_t>(i));
+    detail::sort_by_distance(out);
+    return out.size();
+  }
+
+ private:
+  std::vector<point_type> points_;
+  std::vector<std::uint32_t> source_;
+};
+
+}  // namespace rangenav

@@ -1,0 +1,205 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "rangenav/geometry/voxel_grid.hpp"
+#include "rangenav/mapping/incremental_mapper.hpp"
+#include "rangenav/mapping/key_frame.hpp"
+#include "rangenav/mapping/sparse_point_map.hpp"
+#include "rangenav/search/nearest_neighbor_search.hpp"
+#include "registration/scenes.hpp"
+
+using namespace rangenav;
+
+TEST_CASE("voxel_downsample replaces each voxel by its centroid", "[mapping]") {
+  const std::vector<Eigen::Vector3d> pts = {
+      {0.1, 0.1, 0.1}, {0.3, 0.3, 0.3}, {1.2, 0.1, 0.1}, {-0.1, 0.1, 0.1}, {std::nan(""), 0, 0}};
+  const auto out = voxel_downsample(pts, 0.5);
+  REQUIRE(out.size() == 3);
+  // Ordered by voxel: x in [-0.5, 0), [0, 0.5), [1, 1.5).
+  CHECK(out[0].isApprox(Eigen::Vector3d(-0.1, 0.1, 0.1)));
+  CHECK(out[1].isApprox(Eigen::Vector3d(0.2, 0.2, 0.2)));
+  CHECK(out[2].isApprox(Eigen::Vector3d(1.2, 0.1, 0.1)));
+  // At most one point per voxel, and every input point lies in the voxel of an output point.
+  std::mt19937 rng(3);
+  const auto room = test::room_3d(rng);
+  const auto down = voxel_downsample(room, 0.25);
+  CHECK(down.size() < room.size());
+  for (std::size_t i = 1; i < down.size(); ++i)
+    CHECK((down[i] - down[i - 1]).norm() > 1e-12);
+  CHECK_THROWS_WITH(voxel_downsample(pts, 0.0),
+                    "rangenav: voxel_downsample: argument 'leaf_size' = 0 must be finite and > 0");
+  CHECK(voxel_downsample(std::vector<Eigen::Vector2d>{}, 0.1).empty());
+}
+
+TEST_CASE("KeyFrameSelector: 0.5 m or 25 degrees", "[mapping]") {
+  KeyFrameSelector<2> sel;
+  CHECK(sel.update(Transform2d::Identity()));  // the first is always a key frame
+  CHECK_FALSE(sel.update(make_transform2(0.45, 0.0, 0.0)));
+  CHECK(sel.update(make_transform2(0.3, 0.45, 0.0)));         // 0.54 m from the origin
+  CHECK_FALSE(sel.update(make_transform2(0.3, 0.45, 0.43)));  // 24.6°
+  CHECK(sel.update(make_transform2(0.3, 0.45, 0.44)));        // 25.2°
+  KeyFrameSelector<3> sel3(KeyFrameParams<double>{1.0, 0.1});
+  CHECK(sel3.update(Transform3d::Identity()));
+  CHECK_FALSE(sel3.update(test::make_transform3(0.9, 0, 0, 0, 0.09, 0)));
+  CHECK(sel3.update(test::make_transform3(0.9, 0, 0, 0.11, 0, 0)));
+  CHECK_THROWS_WITH(
+      KeyFrameSelector<2>(KeyFrameParams<double>{-1.0, 0.1}),
+      "rangenav: KeyFrameParams: argument 'min_distance' = -1 must be finite and >= 0");
+}
+
+TEST_CASE("SparsePointMap stores a point only when no stored point is within eps_D (Eq. 5)",
+          "[mapping]") {
+  SparsePointMap<2> map(SparsePointMapParams<double>{0.15, false});
+  auto stats = map.insert(std::vector<Eigen::Vector2d>{{0, 0}, {1, 0}});
+  CHECK(stats.offered == 2);
+  CHECK(stats.stored == 2);
+  stats = map.insert(std::vector<Eigen::Vector2d>{{0.1, 0}, {0.16, 0}, {1, 0.149}, {2, 2}});
+  CHECK(stats.offered == 4);
+  CHECK(stats.stored == 2);  // (0.16, 0) and (2, 2)
+  CHECK(map.size() == 4);
+  CHECK(map.points_offered() == 6);
+  // The pose moves the scan into the map frame before the test.
+  stats = map.insert(std::vector<Eigen::Vector2d>{{0, 0}}, make_transform2(2.0, 2.0, 0.0));
+  CHECK(stats.stored == 0);
+
+  // Invariant on a dense random stream: no two stored points closer than eps_D, and every
+  // offered point within eps_D of a stored one.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-3, 3);
+  SparsePointMap<3> map3(SparsePointMapParams<double>{0.2, true});
+  std::vector<Eigen::Vector3d> offered;
+  for (int batch = 0; batch < 10; ++batch) {
+    std::vector<Eigen::Vector3d> pts(300);
+    for (auto& p : pts)
+      p = {u(rng), u(rng), u(rng) * 0.2};
+    map3.insert(pts);
+    offered.insert(offered.end(), pts.begin(), pts.end());
+  }
+  CHECK(map3.points_offered() == offered.size());
+  const BruteForceSearch<3, double> stored(map3.points());
+  std::vector<Neighbor<double>> nb;
+  for (std::size_t i = 0; i < stored.size(); ++i) {
+    stored.knn(stored.point(i), 2, nb);
+    REQUIRE(nb.size() == 2);
+    CHECK(nb[1].distance_sq >= 0.2 * 0.2);
+  }
+  for (const auto& p : offered)
+    CHECK(stored.nearest(p, 0.2 * 0.2 + 1e-12).has_value());
+  CHECK(map3.memory_bytes() >= map3.size() * sizeof(Eigen::Vector3d));
+
+  CHECK_THROWS_WITH(SparsePointMap<2>(SparsePointMapParams<double>{0.0}),
+                    "rangenav: SparsePointMap: argument 'epsilon_d' = 0 must be finite and > 0");
+  CHECK_THROWS_WITH(SparsePointMap<2>(SparsePointMapParams<double>{-1.0}),
+                    "rangenav: SparsePointMap: argument 'epsilon_d' = -1 must be finite and > 0");
+  Transform2d scaled = Transform2d::Identity();
+  scaled.linear() *= 3.0;
+  CHECK_THROWS_WITH(
+      map.insert(std::vector<Eigen::Vector2d>{{0, 0}}, scaled),
+      "rangenav: SparsePointMap::insert: argument 'pose' is not a finite rigid transform");
+}
+
+namespace {
+
+// Scans of the 2D room seen from `pose` (all points within 6 m, in the robot frame).
+std::vector<Eigen::Vector2d> view_2d(const std::vector<Eigen::Vector2d>& world,
+                                     const Pose2d& pose) {
+  std::vector<Eigen::Vector2d> out;
+  const Transform2d to_robot = pose.to_isometry().inverse(Eigen::Isometry);
+  for (const auto& p : world) {
+    const Eigen::Vector2d q = to_robot * p;
+    if (q.norm() < 6.0 && q.x() > -1.0) out.push_back(q);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("IncrementalMapper corrects drifting odometry in 2D", "[mapping]") {
+  const auto world = test::room_2d(0.02);
+  IncrementalMapper<2> mapper;
+  std::mt19937 rng(9);
+  Pose2d truth{-1.5, 0.5, 0.0}, odom = truth;
+  const Pose2d start = truth;
+  double max_error = 0;
+  std::size_t key_frames = 0;
+  for (int i = 0; i < 60; ++i) {
+    const Pose2d step = i < 30 ? Pose2d{0.1, 0.0, 0.0} : Pose2d{0.05, 0.0, 0.06};
+    truth = compose(truth, step);
+    // Odometry over-estimates distance by 5% and drifts in heading.
+    odom = compose(odom, Pose2d{step.x * 1.05, 0.0, step.theta + 0.01});
+    auto scan = view_2d(world, truth);
+    test::add_noise<2>(scan, 0.005, rng);
+    const auto update = mapper.process(scan, odom.to_isometry());
+    key_frames += update.key_frame ? 1 : 0;
+    const Pose2d estimate = Pose2d::from_isometry(update.pose);
+    // The map frame is the first scan's frame, which is the truth of scan 0.
+    const Pose2d expected = relative(compose(start, Pose2d{0.1, 0, 0}), truth);
+    max_error = std::max(max_error, std::hypot(estimate.x - expected.x, estimate.y - expected.y));
+    if (i > 0) {
+      REQUIRE(update.icp);
+      CHECK(update.registration_accepted);
+    }
+  }
+  CHECK(max_error < 0.03);
+  CHECK(key_frames >= 5);
+  CHECK(key_frames < 30);
+  CHECK(mapper.scans_processed() == 60);
+  CHECK(mapper.map().size() < mapper.map().points_offered());
+}
+
+TEST_CASE("IncrementalMapper rejects low-fitness registrations and keeps the odometry guess",
+          "[mapping]") {
+  const auto world = test::room_2d(0.02);
+  IncrementalMapper<2> mapper;
+  mapper.process(view_2d(world, {0, 0, 0}), Transform2d::Identity());
+  // A scan of somewhere else entirely (no overlap) with odometry saying we moved 0.2 m.
+  std::vector<Eigen::Vector2d> elsewhere;
+  for (int i = 0; i < 100; ++i)
+    elsewhere.emplace_back(30.0 + 0.05 * i, 40.0);
+  const auto update = mapper.process(elsewhere, make_transform2(0.2, 0.0, 0.0));
+  REQUIRE(update.icp);
+  CHECK_FALSE(update.registration_accepted);
+  CHECK_FALSE(update.key_frame);
+  CHECK(update.pose.isApprox(make_transform2(0.2, 0.0, 0.0)));
+  // All-NaN scan: the guess is kept, no exception.
+  const std::vector<Eigen::Vector2d> nan_scan(50, Eigen::Vector2d::Constant(std::nan("")));
+  const auto u2 = mapper.process(nan_scan, make_transform2(0.4, 0.0, 0.0));
+  CHECK_FALSE(u2.registration_accepted);
+  CHECK(u2.pose.isApprox(make_transform2(0.4, 0.0, 0.0)));
+  Transform2d bad = Transform2d::Identity();
+  bad(0, 2) = std::numeric_limits<double>::infinity();
+  CHECK_THROWS_WITH(
+      mapper.process(nan_scan, bad),
+      "rangenav: IncrementalMapper::process: argument 'odometry' is not a finite rigid transform");
+}
+
+TEST_CASE("IncrementalMapper works unchanged in 3D (6-DOF) with voxel filtering", "[mapping]") {
+  std::mt19937 rng(11);
+  const auto world = test::room_3d(rng, 1500);
+  IncrementalMapperParams<double> params;
+  params.voxel_size = 0.1;
+  params.map.epsilon_d = 0.1;
+  IncrementalMapper<3> mapper(params);
+  Transform3d truth = Transform3d::Identity(), odom = truth;
+  for (int i = 0; i < 12; ++i) {
+    const Transform3d step = test::make_transform3(0.1, 0.02, 0.0, 0.0, 0.0, 0.03);
+    truth = truth * step;
+    odom = odom * test::make_transform3(0.11, 0.0, 0.01, 0.005, 0.0, 0.04);
+    auto cloud = test::transformed<3>(world, truth.inverse(Eigen::Isometry));
+    test::add_noise<3>(cloud, 0.003, rng);
+    const auto update = mapper.process(cloud, odom);
+    // The map frame is the first cloud's frame.
+    if (i > 0) {
+      const Transform3d first = test::make_transform3(0.1, 0.02, 0.0, 0.0, 0.0, 0.03);
+      const auto [et, er] = test::transform_error<3>(
+          update.pose, Transform3d(first.inverse(Eigen::Isometry) * truth));
+      CHECK(et < 0.03);
+      CHECK(er < 0.01);
+      CHECK(update.registration_accepted);
+    }
+  }
+}

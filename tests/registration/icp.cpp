@@ -1,0 +1,482 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <sstream>
+#include <vector>
+
+#include "rangenav/registration/frustum.hpp"
+#include "rangenav/registration/icp.hpp"
+#include "rangenav/registration/point_to_point_solver.hpp"
+#include "rangenav/registration/rejectors.hpp"
+#include "rangenav/search/kd_tree.hpp"
+#include "registration/scenes.hpp"
+#include "test_support.hpp"
+
+using namespace rangenav;
+using test::make_transform3;
+using test::transform_error;
+
+// ---- static conformance table ----------------------------------------------------------------
+static_assert(CorrespondenceRejector<DecayingDistanceRejector<double>, 2, double>);
+static_assert(CorrespondenceRejector<DecayingDistanceRejector<float>, 3, float>);
+static_assert(CorrespondenceRejector<UniqueModelPointRejector, 3, double>);
+static_assert(CorrespondenceRejector<TrimmedRejector<double>, 2, double>);
+static_assert(CorrespondenceRejector<MaxDistanceRejector<double>, 3, double>);
+static_assert(CorrespondenceRejector<FrustumRejector<2, double>, 2, double>);
+static_assert(CorrespondenceRejector<FrustumRejector<3, double>, 3, double>);
+static_assert(!CorrespondenceRejector<int, 2, double>);
+static_assert(!CorrespondenceRejector<FrustumRejector<3, double>, 2, double>);
+static_assert(TransformSolver<PointToPointSolver<2, double>, 2, double>);
+static_assert(TransformSolver<PointToPointSolver<3, float>, 3, float>);
+
+namespace {
+
+template <int D>
+std::vector<Correspondence<D, double>> exact_pairs(const std::vector<Point<D, double>>& data,
+                                                   const Transform<D, double>& t) {
+  std::vector<Correspondence<D, double>> pairs;
+  for (std::size_t i = 0; i < data.size(); ++i)
+    pairs.push_back(
+        {data[i], t * data[i], 0.0, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i)});
+  return pairs;
+}
+
+std::vector<Eigen::Vector2d> read_csv_2d(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::vector<Eigen::Vector2d> pts;
+  std::string line;
+  while (std::getline(in, line)) {
+    for (auto& ch : line)
+      if (ch == ',') ch = ' ';
+    std::istringstream s(line);
+    double x, y;
+    if (s >> x >> y) pts.emplace_back(x, y);
+  }
+  return pts;
+}
+
+}  // namespace
+
+// ---- solvers ---------------------------------------------------------------------------------
+
+TEST_CASE("2D closed-form solver recovers a known transform exactly", "[registration]") {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-5, 5);
+  std::vector<Eigen::Vector2d> data(30);
+  for (auto& p : data)
+    p = {u(rng), u(rng)};
+  for (double theta : {0.0, 0.3, -2.5, std::numbers::pi - 1e-9, 3.0}) {
+    const auto truth = make_transform2(1.5, -0.7, theta);
+    const auto t = PointToPointSolver<2, double>{}.solve(exact_pairs<2>(data, truth));
+    REQUIRE(t);
+    const auto [et, er] = transform_error<2>(*t, truth);
+    CHECK(et < 1e-9);
+    CHECK(er < 1e-9);
+  }
+}
+
+TEST_CASE("3D SVD solver recovers rotations and never returns a reflection", "[registration]") {
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(-5, 5);
+  std::vector<Eigen::Vector3d> data(30), planar(30);
+  for (auto& p : data)
+    p = {u(rng), u(rng), u(rng)};
+  for (auto& p : planar)
+    p = {u(rng), u(rng), 0.0};  // coplanar: the reflection trap of Arun's SVD
+  std::normal_distribution<double> noise(0, 0.01);
+  for (const auto& truth :
+       {make_transform3(1, 2, 3, 0.1, -0.2, 2.9), make_transform3(-1, 0, 0.5, 3.0, 0.5, -1.0)}) {
+    for (const auto* pts : {&data, &planar}) {
+      auto pairs = exact_pairs<3>(*pts, truth);
+      const auto t = PointToPointSolver<3, double>{}.solve(pairs);
+      REQUIRE(t);
+      CHECK(transform_error<3>(*t, truth).first < 1e-9);
+      CHECK(transform_error<3>(*t, truth).second < 1e-9);
+      for (auto& c : pairs)
+        c.model += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+      const auto noisy = PointToPointSolver<3, double>{}.solve(pairs);
+      REQUIRE(noisy);
+      CHECK(noisy->linear().determinant() == Approx(1.0));
+      CHECK(transform_error<3>(*noisy, truth).second < 0.01);
+    }
+  }
+}
+
+TEST_CASE("solvers refuse identical, collinear and too few points", "[registration]") {
+  const std::vector<Eigen::Vector2d> same2(10, Eigen::Vector2d(1, 1));
+  CHECK_FALSE(
+      PointToPointSolver<2, double>{}.solve(exact_pairs<2>(same2, make_transform2(1.0, 0.0, 0.0))));
+  const std::vector<Eigen::Vector2d> one2 = {{1, 1}};
+  CHECK_FALSE(PointToPointSolver<2, double>{}.solve(exact_pairs<2>(one2, Transform2d::Identity())));
+  std::vector<Eigen::Vector3d> line3;
+  for (int i = 0; i < 10; ++i)
+    line3.emplace_back(i, 2.0 * i, -i);
+  CHECK_FALSE(
+      PointToPointSolver<3, double>{}.solve(exact_pairs<3>(line3, Transform3d::Identity())));
+  const std::vector<Eigen::Vector3d> same3(10, Eigen::Vector3d(1, 2, 3));
+  CHECK_FALSE(
+      PointToPointSolver<3, double>{}.solve(exact_pairs<3>(same3, Transform3d::Identity())));
+}
+
+// ---- rejectors ---------------------------------------------------------------------------------
+
+TEST_CASE("DecayingDistanceRejector decays exponentially to its final distance", "[registration]") {
+  DecayingDistanceRejector<double> r{2.0, 0.1, 0.5};
+  CHECK(r.distance(0) == Approx(2.0));
+  CHECK(r.distance(1) == Approx(1.0));
+  CHECK(r.distance(3) == Approx(0.25));
+  CHECK(r.distance(4) == Approx(0.125));
+  CHECK(r.distance(5) == Approx(0.1));
+  CHECK(r.distance(50) == Approx(0.1));
+  IcpContext<2, double> ctx{3, Transform2d::Identity(), 0, 0};
+  CHECK(r.max_distance_sq(ctx) == Approx(0.0625));
+  CHECK_FALSE(r.settled(ctx));
+  ctx.iteration = 5;
+  CHECK(r.settled(ctx));
+  CHECK_THROWS_WITH((DecayingDistanceRejector<double>{0.1, 1.0, 0.5}.validate()),
+                    "rangenav: DecayingDistanceRejector: argument 'initial_distance' = "
+                    "0.10000000000000001 must be >= final_distance");
+  CHECK_THROWS_WITH((DecayingDistanceRejector<double>{1.0, 0.1, 1.5}.validate()),
+                    "rangenav: DecayingDistanceRejector: argument 'decay' = 1.5 must be in (0, 1]");
+  CHECK_THROWS_WITH((DecayingDistanceRejector<double>{1.0, -0.1, 0.5}.validate()),
+                    "rangenav: DecayingDistanceRejector: argument 'final_distance' = "
+                    "-0.10000000000000001 must be finite and > 0");
+}
+
+TEST_CASE("UniqueModelPointRejector keeps the closest pair per model point", "[registration]") {
+  std::vector<Correspondence<2, double>> pairs = {
+      {{0, 0}, {0, 0}, 0.5, 0, 7}, {{0, 0}, {0, 0}, 0.1, 1, 7}, {{0, 0}, {0, 0}, 0.3, 2, 3},
+      {{0, 0}, {0, 0}, 0.2, 3, 7}, {{0, 0}, {0, 0}, 0.4, 4, 5}, {{0, 0}, {0, 0}, 0.05, 5, 3}};
+  UniqueModelPointRejector{}.reject(IcpContext<2, double>{}, pairs);
+  REQUIRE(pairs.size() == 3);
+  std::sort(pairs.begin(), pairs.end(),
+            [](auto& a, auto& b) { return a.data_index < b.data_index; });
+  CHECK(pairs[0].data_index == 1);  // model 7
+  CHECK(pairs[1].data_index == 4);  // model 5
+  CHECK(pairs[2].data_index == 5);  // model 3
+}
+
+TEST_CASE("TrimmedRejector keeps the best fraction", "[registration]") {
+  std::vector<Correspondence<3, double>> pairs;
+  for (std::uint32_t i = 0; i < 10; ++i)
+    pairs.push_back({Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), double(9 - i), i, i});
+  TrimmedRejector<double>{0.7}.reject(IcpContext<3, double>{}, pairs);
+  REQUIRE(pairs.size() == 7);
+  for (const auto& c : pairs)
+    CHECK(c.distance_sq < 7.0);
+  CHECK_THROWS_WITH(TrimmedRejector<double>{0.0}.validate(),
+                    "rangenav: TrimmedRejector: argument 'overlap' = 0 must be in (0, 1]");
+}
+
+TEST_CASE("Frustum: 2D wedge and 3D pyramid with near and far", "[registration]") {
+  Frustum<2, double> wedge;
+  wedge.near = 0.5;
+  wedge.far = 4.0;
+  wedge.angle_min = -0.5;
+  wedge.angle_max = 0.5;
+  CHECK(wedge.contains({2, 0}));
+  CHECK_FALSE(wedge.contains({0.3, 0}));  // nearer than near
+  CHECK_FALSE(wedge.contains({4.5, 0}));  // beyond far
+  CHECK_FALSE(wedge.contains({1, 1}));    // bearing 0.785 > 0.5
+  CHECK(wedge.contains({2, 2 * std::tan(0.45)}));
+  wedge.pose = make_transform2(10.0, 0.0, std::numbers::pi / 2);  // sensor at (10, 0) looking +y
+  CHECK(wedge.contains({10, 2}));
+  CHECK_FALSE(wedge.contains({12, 0}));
+
+  Frustum<3, double> pyramid;
+  pyramid.near = 0.3;
+  pyramid.far = 5.0;
+  pyramid.horizontal_fov = std::numbers::pi / 2;  // |y| <= x
+  pyramid.vertical_fov = std::numbers::pi / 3;    // |z| <= x tan(30°)
+  CHECK(pyramid.contains({2, 1.9, 1.1}));
+  CHECK_FALSE(pyramid.contains({2, 2.1, 0}));
+  CHECK_FALSE(pyramid.contains({2, 0, 1.2}));
+  CHECK_FALSE(pyramid.contains({0.2, 0, 0}));
+  CHECK_FALSE(pyramid.contains({5.1, 0, 0}));
+  CHECK_FALSE(pyramid.contains({-2, 0, 0}));
+  pyramid.far = 0.2;
+  CHECK_THROWS_WITH(pyramid.validate(),
+                    "rangenav: Frustum: argument 'far' = 0.20000000000000001 must be > near");
+}
+
+// ---- ICP ---------------------------------------------------------------------------------------
+
+TEST_CASE("ICP recovers known 2D transforms forward and inverse", "[registration]") {
+  const auto model = test::room_2d();
+  const KdTree<2, double> tree(model);
+  for (const auto& truth : {make_transform2(0.3, -0.2, 0.15), make_transform2(-0.4, 0.25, -0.2),
+                            make_transform2(0.0, 0.0, 0.0)}) {
+    for (const auto& t : {truth, Transform2d(truth.inverse(Eigen::Isometry))}) {
+      // data = T^-1 * model, so aligning data onto model must give T.
+      const auto data = test::transformed<2>(model, t.inverse(Eigen::Isometry));
+      PaperIcp<2> icp;
+      icp.params.translation_epsilon = icp.params.rotation_epsilon = 1e-9;
+      const auto result = icp.align(tree, data);
+      INFO(to_string(result.reason) << " after " << result.iterations);
+      CHECK(result.converged);
+      CHECK(result.reason == IcpTermination::converged);
+      const auto [et, er] = transform_error<2>(result.transform, t);
+      CHECK(et < 1e-6);
+      CHECK(er < 1e-6);
+      CHECK(result.rmse < 1e-6);
+      CHECK(result.fitness == Approx(1.0));
+      CHECK(result.inlier_count == model.size());  // random samples: no two coincide
+      REQUIRE(result.smallest_eigenvalue);
+      CHECK(*result.smallest_eigenvalue > icp.params.degeneracy_threshold);
+    }
+  }
+}
+
+TEST_CASE("ICP recovers known 3D transforms forward and inverse", "[registration]") {
+  std::mt19937 rng(3);
+  const auto model = test::room_3d(rng);
+  const KdTree<3, double> tree(model);
+  const auto truth = make_transform3(0.2, -0.15, 0.1, 0.05, -0.04, 0.12);
+  for (const auto& t : {truth, Transform3d(truth.inverse(Eigen::Isometry))}) {
+    const auto data = test::transformed<3>(model, t.inverse(Eigen::Isometry));
+    PaperIcp<3> icp;
+    icp.params.translation_epsilon = icp.params.rotation_epsilon = 1e-7;
+    icp.params.max_iterations = 100;
+    const auto result = icp.align(tree, data);
+    INFO(to_string(result.reason) << " after " << result.iterations);
+    CHECK(result.converged);
+    const auto [et, er] = transform_error<3>(result.transform, t);
+    CHECK(et < 1e-6);
+    CHECK(er < 1e-6);
+    CHECK(result.fitness == Approx(1.0));
+  }
+}
+
+TEST_CASE("ICP with noise and outliers stays accurate", "[registration]") {
+  std::mt19937 rng(4);
+  const auto model = test::room_2d(0.02);
+  const KdTree<2, double> tree(model);
+  const auto truth = make_transform2(0.25, 0.1, 0.1);
+  auto data = test::transformed<2>(test::room_2d(0.03), truth.inverse(Eigen::Isometry));
+  test::add_noise<2>(data, 0.01, rng);
+  std::uniform_real_distribution<double> u(-3, 5);
+  const std::size_t inliers = data.size();
+  for (int i = 0; i < 60; ++i)
+    data.emplace_back(u(rng), u(rng));  // clutter
+  PaperIcp<2> icp;
+  icp.rejector<DecayingDistanceRejector<double>>().final_distance = 0.05;
+  const auto result = icp.align(tree, data);
+  CHECK(result.converged);
+  const auto [et, er] = transform_error<2>(result.transform, truth);
+  CHECK(et < 0.01);
+  CHECK(er < 0.005);
+  CHECK(result.rmse < 0.03);
+  CHECK(result.inlier_count <= inliers + 10);
+
+  std::mt19937 rng3(5);
+  const auto model3 = test::room_3d(rng3, 600);
+  const KdTree<3, double> tree3(model3);
+  const auto truth3 = make_transform3(0.1, 0.2, -0.05, 0.03, 0.02, -0.1);
+  auto data3 = test::transformed<3>(test::room_3d(rng3, 600), truth3.inverse(Eigen::Isometry));
+  test::add_noise<3>(data3, 0.005, rng3);
+  std::uniform_real_distribution<double> u3(-3, 3);
+  for (int i = 0; i < 100; ++i)
+    data3.emplace_back(u3(rng3), u3(rng3), u3(rng3) * 0.5 + 1.5);
+  Icp<3, double, DecayingDistanceRejector<double>, TrimmedRejector<double>> icp3;
+  icp3.rejector<TrimmedRejector<double>>().overlap = 0.85;
+  const auto r3 = icp3.align(tree3, data3);
+  CHECK(r3.converged);
+  CHECK(transform_error<3>(r3.transform, truth3).first < 0.02);
+  CHECK(transform_error<3>(r3.transform, truth3).second < 0.01);
+}
+
+TEST_CASE("ICP aligns a partially overlapping scan (unique pairs + decaying threshold)",
+          "[registration]") {
+  const auto model = test::room_2d();
+  // The data sees only the part of the room with x > 0.5 (half of it is new to the model).
+  std::vector<Eigen::Vector2d> part;
+  for (const auto& p : model)
+    if (p.x() > 0.5) part.push_back(p);
+  std::vector<Eigen::Vector2d> model_part;
+  for (const auto& p : model)
+    if (p.x() < 3.0) model_part.push_back(p);
+  const KdTree<2, double> tree(model_part);
+  const auto truth = make_transform2(0.2, -0.1, 0.08);
+  const auto data = test::transformed<2>(part, truth.inverse(Eigen::Isometry));
+  PaperIcp<2> icp;
+  icp.rejector<DecayingDistanceRejector<double>>().final_distance = 0.05;
+  const auto result = icp.align(tree, data);
+  CHECK(result.converged);
+  const auto [et, er] = transform_error<2>(result.transform, truth);
+  CHECK(et < 1e-3);
+  CHECK(er < 1e-3);
+  CHECK(result.fitness < 0.9);  // the non-overlapping part found no partner
+  CHECK(result.fitness > 0.3);
+  // Without rejection, the non-overlapping points drag the estimate away.
+  Icp<2> plain;
+  const auto biased = plain.align(tree, data);
+  CHECK(transform_error<2>(biased.transform, truth).first > 0.02);
+}
+
+TEST_CASE("FrustumRejector culls data outside the model frustum every iteration",
+          "[registration]") {
+  // Model sensor at the origin looking along +x with a 90° wedge up to 4 m.
+  const auto room = test::room_2d();
+  Frustum<2, double> fov;
+  fov.far = 4.0;
+  fov.angle_min = -std::numbers::pi / 4;
+  fov.angle_max = std::numbers::pi / 4;
+  std::vector<Eigen::Vector2d> model;
+  for (const auto& p : room)
+    if (fov.contains(p)) model.push_back(p);
+  const KdTree<2, double> tree(model);
+  const auto truth = make_transform2(0.15, 0.1, 0.05);
+  const auto data = test::transformed<2>(room, truth.inverse(Eigen::Isometry));
+  Icp<2, double, FrustumRejector<2, double>, MaxDistanceRejector<double>> icp;
+  icp.rejector<FrustumRejector<2, double>>().frustum = fov;
+  icp.rejector<MaxDistanceRejector<double>>().max_distance = 0.5;
+  icp.params.check_degeneracy = false;
+  const auto result = icp.align(tree, data);
+  CHECK(result.converged);
+  CHECK(transform_error<2>(result.transform, truth).first < 1e-4);
+  // Every kept pair's data point lies inside the frustum under the final transform.
+  for (const auto& c : icp.correspondences())
+    CHECK(fov.contains(result.transform * c.data));
+  CHECK(result.inlier_count < data.size() / 2);
+
+  // Mode 2 (paper 004): pairs whose model point is outside the data sensor's frustum are dropped.
+  FrustumRejector<2, double> r{fov, FrustumRejector<2, double>::Mode::model_in_data_frustum};
+  std::vector<Correspondence<2, double>> pairs = {
+      {{0, 0}, {2, 0}, 0, 0, 0}, {{0, 0}, {-2, 0}, 0, 1, 1}, {{0, 0}, {12, 0}, 0, 2, 2}};
+  IcpContext<2, double> ctx{0, make_transform2(10.0, 0.0, 0.0), 0, 0};  // data sensor at x = 10
+  r.reject(ctx, pairs);
+  REQUIRE(pairs.size() == 1);
+  CHECK(pairs[0].model_index == 2);
+}
+
+TEST_CASE("ICP reports a featureless corridor as degenerate", "[registration]") {
+  const auto model = test::corridor_2d();
+  const KdTree<2, double> tree(model);
+  const auto data = test::transformed<2>(model, make_transform2(-0.3, 0.05, 0.02));
+  PaperIcp<2> icp;
+  const auto result = icp.align(tree, data);
+  CHECK_FALSE(result.converged);
+  CHECK(result.reason == IcpTermination::degenerate);
+  REQUIRE(result.smallest_eigenvalue);
+  CHECK(*result.smallest_eigenvalue < 1e-3);
+  REQUIRE(result.weakest_direction);
+  CHECK(std::abs((*result.weakest_direction)(0)) > 0.9);  // along the corridor (x)
+  CHECK((std::isinf(*result.condition_number) || *result.condition_number > 100.0));
+  CHECK(result.transform.matrix().allFinite());
+  // The lateral offset and the heading are still recovered.
+  CHECK(std::abs(result.transform.translation().y() + 0.05 * 1) < 0.02);
+}
+
+TEST_CASE("ICP answers bad input clearly, never with NaN", "[registration]") {
+  const auto model = test::room_2d();
+  const KdTree<2, double> tree(model);
+  PaperIcp<2> icp;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+
+  CHECK_THROWS_WITH(icp.align(tree, std::vector<Eigen::Vector2d>{}),
+                    "rangenav: Icp::align: argument 'data' is empty (0 points)");
+  CHECK_THROWS_WITH(icp.align(KdTree<2, double>(std::vector<Eigen::Vector2d>{}), model),
+                    "rangenav: Icp::align: argument 'model' is empty (0 points)");
+  Transform2d bad = Transform2d::Identity();
+  bad.translation().x() = nan;
+  CHECK_THROWS_WITH(icp.align(tree, model, bad),
+                    "rangenav: Icp::align: argument 'initial_guess' is not finite");
+  Transform2d scaled = Transform2d::Identity();
+  scaled.linear() *= 2.0;
+  CHECK_THROWS_WITH(icp.align(tree, model, scaled),
+                    "rangenav: Icp::align: argument 'initial_guess' is not a rigid transform");
+  icp.params.max_iterations = 0;
+  CHECK_THROWS_WITH(icp.align(tree, model),
+                    "rangenav: IcpParams: argument 'max_iterations' = 0 must be >= 1");
+  icp.params.max_iterations = 50;
+
+  // All-NaN data: a result saying why, with the initial guess.
+  const std::vector<Eigen::Vector2d> all_nan(100, Eigen::Vector2d(nan, nan));
+  const auto guess = make_transform2(1.0, 2.0, 0.5);
+  auto r = icp.align(tree, all_nan, guess);
+  CHECK(r.reason == IcpTermination::too_few_pairs);
+  CHECK_FALSE(r.converged);
+  CHECK(r.data_count == 0);
+  CHECK(r.transform.isApprox(guess));
+  CHECK(r.rmse == 0.0);
+  CHECK(r.fitness == 0.0);
+
+  // One point: fewer than the solver needs.
+  r = icp.align(tree, std::vector<Eigen::Vector2d>{{0.0, -2.0}});
+  CHECK(r.reason == IcpTermination::too_few_pairs);
+
+  // Identical points: the rotation is undetermined (without the unique-pair rejector, which would
+  // leave a single pair: too few).
+  r = Icp<2>{}.align(tree, std::vector<Eigen::Vector2d>(50, Eigen::Vector2d(0.0, -2.0)));
+  CHECK(r.reason == IcpTermination::degenerate);
+  CHECK(r.transform.matrix().allFinite());
+
+  // No overlap at all: too few pairs.
+  r = icp.align(tree, test::transformed<2>(model, make_transform2(100.0, 0.0, 0.0)));
+  CHECK(r.reason == IcpTermination::too_few_pairs);
+  CHECK(r.transform.matrix().allFinite());
+
+  // 3D identical points and NaN guess.
+  const KdTree<3, double> tree3(
+      std::vector<Eigen::Vector3d>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}});
+  PaperIcp<3> icp3;
+  const auto r3 = Icp<3>{}.align(tree3, std::vector<Eigen::Vector3d>(10, Eigen::Vector3d(0, 0, 0)));
+  CHECK(r3.reason == IcpTermination::degenerate);
+  Transform3d nan3 = Transform3d::Identity();
+  nan3.linear()(0, 0) = nan;
+  CHECK_THROWS_WITH(icp3.align(tree3, tree3.points(), nan3),
+                    "rangenav: Icp::align: argument 'initial_guess' is not finite");
+  icp3.rejector<DecayingDistanceRejector<double>>().decay = 0;
+  CHECK_THROWS_WITH(icp3.align(tree3, tree3.points()),
+                    "rangenav: DecayingDistanceRejector: argument 'decay' = 0 must be in (0, 1]");
+}
+
+TEST_CASE("ICP in float gives the same answer", "[registration]") {
+  const auto model = test::room_2d();
+  std::vector<Eigen::Vector2f> model_f;
+  for (const auto& p : model)
+    model_f.push_back(p.cast<float>());
+  const KdTree<2, float> tree(model_f);
+  const auto truth = make_transform2(0.2f, -0.1f, 0.1f);
+  std::vector<Eigen::Vector2f> data;
+  for (const auto& p : model_f)
+    data.push_back(truth.inverse(Eigen::Isometry) * p);
+  PaperIcp<2, float> icp;
+  icp.params.translation_epsilon = 1e-5f;
+  const auto r = icp.align(tree, data);
+  CHECK(r.converged);
+  const Transform2f e = r.transform.inverse(Eigen::Isometry) * truth;
+  CHECK(e.translation().norm() < 1e-3f);
+}
+
+TEST_CASE("ICP on libpointmatcher's 2D box scans", "[registration][data]") {
+  const auto one = test::data_file_or_skip("libpointmatcher/2D_oneBox.csv");
+  const auto two = test::data_file_or_skip("libpointmatcher/2D_twoBoxes.csv");
+  if (one.empty() || two.empty()) return;
+  const auto a = read_csv_2d(one), b = read_csv_2d(two);
+  REQUIRE(a.size() == 361);
+  REQUIRE(b.size() == 361);
+  const KdTree<2, double> tree_a(a), tree_b(b);
+  // A known transform of a real scan is recovered exactly.
+  const auto truth = make_transform2(0.1, 0.05, 0.05);
+  PaperIcp<2> icp;
+  icp.rejector<DecayingDistanceRejector<double>>().final_distance = 0.05;
+  const auto r = icp.align(tree_a, test::transformed<2>(a, truth.inverse(Eigen::Isometry)));
+  // (a copy of one scan has the same angular sampling: aliasing limits point-to-point ICP)
+  CHECK(transform_error<2>(r.transform, truth).first < 0.01);
+  CHECK(transform_error<2>(r.transform, truth).second < 0.01);
+  // The two scans of the tutorial: aligning one onto the other and back gives inverse transforms
+  // and a tight fit on the common structure.
+  const auto ab = icp.align(tree_a, b);
+  const auto ba = icp.align(tree_b, a);
+  INFO(ab.transform.matrix() << "\nrmse " << ab.rmse << " fitness " << ab.fitness);
+  CHECK(ab.rmse < 0.02);
+  CHECK(ab.fitness > 0.5);
+  const auto [et, er] =
+      transform_error<2>(ab.transform, Transform2d(ba.transform.inverse(Eigen::Isometry)));
+  CHECK(et < 0.02);
+  CHECK(er < 0.01);
+}

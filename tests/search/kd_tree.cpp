@@ -1,0 +1,177 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "rangenav/search/kd_tree.hpp"
+#include "rangenav/search/nearest_neighbor_search.hpp"
+
+using namespace rangenav;
+
+// ---- static conformance table ----------------------------------------------------------------
+static_assert(NearestNeighborSearch<BruteForceSearch<2, double>>);
+static_assert(NearestNeighborSearch<BruteForceSearch<3, float>>);
+static_assert(NearestNeighborSearch<KdTree<2, double>>);
+static_assert(NearestNeighborSearch<KdTree<2, float>>);
+static_assert(NearestNeighborSearch<KdTree<3, double>>);
+static_assert(NearestNeighborSearch<KdTree<3, float>>);
+static_assert(NearestNeighborSearch<GrowingKdTree<2, double>>);
+static_assert(NearestNeighborSearch<GrowingKdTree<3, float>>);
+static_assert(!NearestNeighborSearch<std::vector<Eigen::Vector2d>>);
+static_assert(!NearestNeighborSearch<int>);
+
+namespace {
+
+template <int D, class S>
+std::vector<Point<D, S>> random_points(std::size_t n, std::mt19937& rng, S extent) {
+  std::uniform_real_distribution<S> u(-extent, extent);
+  std::vector<Point<D, S>> pts(n);
+  for (auto& p : pts)
+    for (int d = 0; d < D; ++d)
+      p[d] = u(rng);
+  return pts;
+}
+
+// Compares a search structure against brute force on random queries: the same distances for
+// nearest (bounded and unbounded), knn and radius; indices resolve to points at those distances.
+template <class Search, int D, class S>
+void check_against_brute_force(const Search& search, const BruteForceSearch<D, S>& brute,
+                               std::mt19937& rng, S extent) {
+  REQUIRE(search.size() == brute.size());
+  std::vector<Neighbor<S>> a, b;
+  const auto queries = random_points<D, S>(200, rng, extent * S(1.2));
+  const S tol = std::is_same_v<S, float> ? S(1e-5) : S(1e-12);
+  for (const auto& q : queries) {
+    const auto n1 = search.nearest(q);
+    const auto n2 = brute.nearest(q);
+    REQUIRE(n1.has_value() == n2.has_value());
+    if (n1) {
+      CHECK(n1->distance_sq == Approx(n2->distance_sq).margin(tol));
+      CHECK((search.point(n1->index) - q).squaredNorm() == Approx(n1->distance_sq).margin(tol));
+    }
+    // A bound below the true nearest distance finds nothing; above it finds the same point.
+    if (n2 && n2->distance_sq > S(0)) {
+      CHECK_FALSE(search.nearest(q, n2->distance_sq * S(0.999)).has_value());
+      const auto bounded = search.nearest(q, n2->distance_sq * S(1.001) + tol);
+      REQUIRE(bounded.has_value());
+      CHECK(bounded->distance_sq == Approx(n2->distance_sq).margin(tol));
+    }
+    for (std::size_t k : {1u, 5u, 17u}) {
+      REQUIRE(search.knn(q, k, a) == brute.knn(q, k, b));
+      for (std::size_t i = 0; i < a.size(); ++i) {
+        CHECK(a[i].distance_sq == Approx(b[i].distance_sq).margin(tol));
+        if (i > 0) CHECK(a[i - 1].distance_sq <= a[i].distance_sq);
+      }
+    }
+    const S r_sq = extent * extent * S(0.02);
+    REQUIRE(search.radius(q, r_sq, a) == brute.radius(q, r_sq, b));
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      CHECK(a[i].distance_sq < r_sq);
+      CHECK(a[i].distance_sq == Approx(b[i].distance_sq).margin(tol));
+    }
+    // knn under a bound returns only points strictly inside the bound.
+    search.knn(q, 50, a, r_sq);
+    brute.knn(q, 50, b, r_sq);
+    CHECK(a.size() == b.size());
+    for (const auto& nb : a)
+      CHECK(nb.distance_sq < r_sq);
+  }
+}
+
+template <int D, class S>
+void static_tree_case() {
+  std::mt19937 rng(42 + D);
+  for (std::size_t n : {1u, 7u, 100u, 3000u}) {
+    const auto pts = random_points<D, S>(n, rng, S(10));
+    const KdTree<D, S> tree(pts);
+    const BruteForceSearch<D, S> brute(pts);
+    check_against_brute_force(tree, brute, rng, S(10));
+  }
+}
+
+template <int D, class S>
+void growing_tree_case() {
+  std::mt19937 rng(7 + D);
+  GrowingKdTree<D, S> tree;
+  std::vector<Point<D, S>> all;
+  std::uniform_int_distribution<int> batch(1, 300);
+  for (int round = 0; round < 25; ++round) {
+    const auto pts = random_points<D, S>(static_cast<std::size_t>(batch(rng)), rng, S(10));
+    REQUIRE(tree.insert(pts) == pts.size());
+    all.insert(all.end(), pts.begin(), pts.end());
+    // Logarithmic chain: at most log2(n) + 1 trees.
+    CHECK(static_cast<double>(tree.tree_count()) <=
+          std::log2(static_cast<double>(all.size())) + 1.0);
+    if (round % 6 == 5) check_against_brute_force(tree, BruteForceSearch<D, S>(all), rng, S(10));
+  }
+  // Indices are stable: point(i) is the i-th inserted point.
+  for (std::size_t i = 0; i < all.size(); ++i)
+    REQUIRE(tree.point(i) == all[i]);
+  // Single-point insertion follows the binary-counter pattern.
+  GrowingKdTree<D, S> single;
+  for (std::size_t i = 0; i < 64; ++i)
+    single.insert_point(all[i]);
+  CHECK(single.tree_count() == 1);
+  check_against_brute_force(
+      single, BruteForceSearch<D, S>(std::vector<Point<D, S>>(all.begin(), all.begin() + 64)), rng,
+      S(10));
+}
+
+}  // namespace
+
+TEST_CASE("KdTree matches brute force in 2D and 3D, float and double", "[search]") {
+  static_tree_case<2, double>();
+  static_tree_case<2, float>();
+  static_tree_case<3, double>();
+  static_tree_case<3, float>();
+}
+
+TEST_CASE("GrowingKdTree matches brute force while growing", "[search]") {
+  growing_tree_case<2, double>();
+  growing_tree_case<2, float>();
+  growing_tree_case<3, double>();
+  growing_tree_case<3, float>();
+}
+
+TEST_CASE("kd-trees skip non-finite points and map back to the source index", "[search]") {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<Eigen::Vector2d> pts = {
+      {0, 0}, {nan, 1}, {1, 0}, {std::numeric_limits<double>::infinity(), 0}, {0, 2}};
+  const KdTree<2, double> tree(pts);
+  REQUIRE(tree.size() == 3);
+  const auto nb = tree.nearest({0.9, 0.1});
+  REQUIRE(nb);
+  CHECK(tree.point(nb->index) == Eigen::Vector2d(1, 0));
+  CHECK(tree.source_index(nb->index) == 2);
+  CHECK(tree.source_index(tree.nearest({0, 1.9})->index) == 4);
+  GrowingKdTree<2, double> growing;
+  CHECK(growing.insert(pts) == 3);
+  CHECK_FALSE(growing.insert_point({nan, 0}));
+  CHECK(growing.size() == 3);
+}
+
+TEST_CASE("kd-trees answer queries on empty and degenerate sets", "[search]") {
+  std::vector<Neighbor<double>> out;
+  const KdTree<3, double> empty(std::vector<Eigen::Vector3d>{});
+  CHECK(empty.size() == 0);
+  CHECK_FALSE(empty.nearest({0, 0, 0}).has_value());
+  CHECK(empty.knn({0, 0, 0}, 3, out) == 0);
+  CHECK(empty.radius({0, 0, 0}, 1.0, out) == 0);
+  const GrowingKdTree<2, double> growing;
+  CHECK_FALSE(growing.nearest({0, 0}).has_value());
+  // All points identical: every query returns them, at equal distance.
+  const std::vector<Eigen::Vector3d> same(50, Eigen::Vector3d(1, 2, 3));
+  const KdTree<3, double> tree(same);
+  CHECK(tree.knn({1, 2, 4}, 10, out) == 10);
+  for (const auto& nb : out)
+    CHECK(nb.distance_sq == Approx(1.0));
+  CHECK(tree.radius({1, 2, 3}, 1e-9, out) == 50);
+  CHECK(tree.knn({0, 0, 0}, 0, out) == 0);
+}
+
+TEST_CASE("KdTree rejects non-finite points in an adopted array", "[search]") {
+  std::vector<Eigen::Vector2d> pts = {{0, 0}, {std::nan(""), 0}};
+  CHECK_THROWS_WITH((KdTree<2, double>(std::move(pts))),
+                    "rangenav: KdTree: argument 'points[1]' = (non-finite) must be finite");
+}
