@@ -13,7 +13,8 @@
 //      per door in every particle, §IV), printing the mean and maximum position errors;
 //   4. draw the grid with the detected doors' angle ranges (like the paper's Fig. 4) to
 //      doors_out/doors.svg and end with one JSON line.
-// The paper's global-localization success rates (its Fig. 8-9) are not rebuilt here.
+// `07_doors --global [runs] [particle counts...]` instead measures global-localization success
+// rates of both filters (the paper's Fig. 8-9) with doors closed and 30 deg open.
 //
 // Run it as `07_doors [seed]`.
 
@@ -27,6 +28,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <rangenav/io/svg.hpp>
@@ -109,6 +111,59 @@ TrackingResult track(const sim::World& world, const OccupancyGrid& grid,
   return r;
 }
 
+/// Global localization (§V.C): both filters start uniform over the free cells with `particles`
+/// particles (a fixed count here) while the robot drives 9 m along the corridor; a run succeeds
+/// when the final estimate is within 0.3 m and 0.1 rad of the truth.
+std::pair<bool, bool> global_run(const sim::World& world, const OccupancyGrid& grid,
+                                 const std::vector<DoorModel>& doors, std::size_t particles,
+                                 std::uint64_t seed) {
+  sim::LaserScannerParams lp;
+  lp.geometry = ScanGeometry<double>::from_fov(std::numbers::pi, deg_to_rad(1.0), 0.05, 30.0);
+  const sim::LaserScanner2D laser(lp);
+  sim::DifferentialDriveParams rp;
+  rp.odometry.v_scale = 0.03;
+  rp.odometry.omega_bias = 0.02;
+  rp.odometry.v_sigma = 0.05;
+  rp.odometry.omega_sigma = 0.05;
+  std::mt19937_64 sim_rng(seed), rng_a(seed + 1), rng_b(seed + 1);
+  const double start_x = std::uniform_real_distribution<double>(1.0, 9.0)(sim_rng);
+  sim::DifferentialDriveRobot robot(rp, {start_x, 1.0, 0.0});
+  const OdometryMotionParams motion{0.1, 0.05, 0.1, 0.05};
+  LikelihoodFieldParams field;
+  field.sigma_hit = 0.2;  // flatter than for tracking: see tests/localization/mcl.cpp
+  MclParams mp;
+  mp.min_particles = mp.max_particles = particles;
+  mp.adapt_particle_count = false;
+  MonteCarloLocalization<> mcl(OdometryMotionModel(motion), LikelihoodFieldModel(grid, field), mp);
+  DoorAwareMclParams dp;
+  dp.motion = motion;
+  dp.field = field;
+  DoorAwareMcl door_mcl(grid, doors, dp);
+  mcl.initialize_uniform(grid, particles, rng_a);
+  door_mcl.initialize_uniform(grid, particles, rng_b);
+  LikelihoodFieldModel::Observation z;
+  DoorAwareObservation dz;
+  Pose2d last = robot.odometry();
+  while (robot.pose().x < start_x + 9.0) {
+    for (int k = 0; k < 10; ++k) {
+      const Pose2d& p = robot.pose();
+      robot.step(world, 0.5, -1.5 * (p.y - 1.0) - 2.0 * p.theta, sim_rng);
+    }
+    const auto scan = laser.scan(world, robot.pose(), sim_rng);
+    mcl.sensor_model().prepare(scan, Pose2d{}, z);
+    door_mcl.prepare(scan, Pose2d{}, dz);
+    const OdometryReading u{last, robot.odometry()};
+    mcl.update(u, z, rng_a);
+    door_mcl.update(u, dz, rng_b);
+    last = robot.odometry();
+  }
+  const auto ok = [&](const Pose2d& e) {
+    return (e.position() - robot.pose().position()).norm() < 0.3 &&
+           std::abs(angle_difference(e.theta, robot.pose().theta)) < 0.1;
+  };
+  return {ok(mcl.estimate()), ok(door_mcl.estimate())};
+}
+
 std::string fixed(double v, int digits = 3) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(digits) << v;
@@ -118,7 +173,10 @@ std::string fixed(double v, int digits = 3) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::uint64_t seed = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 1;
+  // `07_doors --global runs n1 n2 ...`: the global-localization success rates instead of the
+  // default lesson (slow: minutes for 10 runs of 10k particles).
+  const bool global = argc > 1 && std::string(argv[1]) == "--global";
+  const std::uint64_t seed = argc > 1 && !global ? std::strtoull(argv[1], nullptr, 10) : 1;
 
   // 1. Mapping with known poses while the doors change between passes.
   const std::vector<std::vector<double>> passes = {std::vector<double>(8, 90 * deg),
@@ -158,6 +216,34 @@ int main(int argc, char** argv) {
               << " m from the true hinge\n";
   }
   detector.remove_doors(grid);
+
+  if (global) {
+    const std::uint64_t runs = argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 10;
+    std::vector<std::size_t> counts;
+    for (int i = 3; i < argc; ++i)
+      counts.push_back(std::strtoull(argv[i], nullptr, 10));
+    if (counts.empty()) counts = {1000, 5000, 10000, 50000};
+    std::string json;
+    for (const double opening : {0.0, 30 * deg}) {
+      const sim::Scene scene = sim::office_corridor(std::vector<double>(8, opening));
+      for (const std::size_t n : counts) {
+        std::size_t mcl_ok = 0, door_ok = 0;
+        for (std::uint64_t r = 0; r < runs; ++r) {
+          const auto [a, b] = global_run(scene.world, grid, doors, n, 100 + r);
+          mcl_ok += a ? 1 : 0;
+          door_ok += b ? 1 : 0;
+        }
+        std::cout << "global localization, doors " << (opening == 0 ? "closed" : "30 deg open")
+                  << ", " << n << " particles: MCL " << mcl_ok << "/" << runs << ", door-aware "
+                  << door_ok << "/" << runs << "\n";
+        json += std::string(json.empty() ? "" : ", ") + "\"" +
+                (opening == 0 ? "closed_" : "partially_open_") + std::to_string(n) + "\": [" +
+                std::to_string(mcl_ok) + ", " + std::to_string(door_ok) + "]";
+      }
+    }
+    std::cout << "{\"runs\": " << runs << ", \"successes_mcl_door_mcl\": {" << json << "}}\n";
+    return 0;
+  }
 
   // 3. Localization with both filters for three door states.
   struct State {
