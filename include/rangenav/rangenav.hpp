@@ -4,6 +4,11 @@
 // complete.
 
 // clang-format off
+#include "rangenav/control/indiveri_path_tracker.hpp"
+#include "rangenav/control/indiveri_pose_controller.hpp"
+#include "rangenav/control/local_frame_path.hpp"
+#include "rangenav/control/motor_control.hpp"
+#include "rangenav/control/reactive.hpp"
 #include "rangenav/core/angles.hpp"
 #include "rangenav/core/cloud.hpp"
 #include "rangenav/core/error.hpp"
@@ -18,6 +23,7 @@
 #include "rangenav/io/carmen.hpp"
 #include "rangenav/io/line_reader.hpp"
 #include "rangenav/io/pcd.hpp"
+#include "rangenav/io/pgm.hpp"
 #include "rangenav/io/ply.hpp"
 #include "rangenav/io/slam_relations.hpp"
 #include "rangenav/io/svg.hpp"
@@ -25,6 +31,9 @@
 #include "rangenav/mapping/incremental_mapper.hpp"
 #include "rangenav/mapping/key_frame.hpp"
 #include "rangenav/mapping/sparse_point_map.hpp"
+#include "rangenav/planning/a_star.hpp"
+#include "rangenav/planning/topological_map.hpp"
+#include "rangenav/planning/voronoi_path_graph.hpp"
 #include "rangenav/registration/correspondence.hpp"
 #include "rangenav/registration/frustum.hpp"
 #include "rangenav/registration/hayai.hpp"

@@ -341,6 +341,12 @@ TEST_CASE("pcd reads PCL's bunny (ascii v.5 header) and bun0 (normals, curvature
     CHECK(bun0.normals[i].norm() == Approx(1.0f).epsilon(1e-5));
   }
   CHECK(bun0.normals[0].x() == -0.16884723f);  // first data line of the file
+
+  ScratchDir dir("pcd_bunny");
+  for (const auto format : {PcdFormat::binary, PcdFormat::binary_compressed, PcdFormat::ascii}) {
+    rangenav::io::write_pcd(dir / "bun0.pcd", bun0, format);
+    require_same_cloud(bun0, rangenav::io::read_pcd<float>(dir / "bun0.pcd"));
+  }
 }
 
 TEST_CASE("pcd reads PCL's organised binary_compressed clouds and writes them back bit-exactly") {
@@ -418,4 +424,10 @@ TEST_CASE("pcd reads MRPT's organised ascii RGB-D frame") {
   CHECK(cloud.at(0, 0).z() == Approx(1.0141944));                    // "nan nan 1.0141944 8425308"
   CHECK(cloud.colors[0] == rangenav::Rgba{0x80, 0x8f, 0x5c, 0x00});  // 8425308 = 0x00808f5c
   CHECK(cloud.colors[60 * 160 + 80] == rangenav::Rgba{0xeb, 0xeb, 0xeb, 0xff});
+
+  ScratchDir dir("pcd_mrpt");
+  for (const auto format : {PcdFormat::binary, PcdFormat::binary_compressed, PcdFormat::ascii}) {
+    rangenav::io::write_pcd(dir / "frame.pcd", cloud, format);
+    require_same_cloud(cloud, rangenav::io::read_pcd(dir / "frame.pcd"));
+  }
 }

@@ -387,17 +387,28 @@ TEST_CASE("layers group the shapes and the legend shows their colours", "[io][sv
   CHECK(tags_named(group(text, "robot"), "path").size() == 1);
   CHECK(group(text, "empty").find('<') == std::string::npos);
   // Legend: the named layers that hold shapes, each with its first shape's colour.
+  // A dot for points, a line for lines, a box for filled areas.
   const std::string legend = group(text, "legend");
   const auto swatches = tags_named(legend, "path");
+  const auto boxes = tags_named(legend, "rect");
   const auto labels = tags_named(legend, "text");
-  REQUIRE(swatches.size() == 3);
+  REQUIRE(swatches.size() == 2);
+  REQUIRE(boxes.size() == 1);
   REQUIRE(labels.size() == 3);
   CHECK(text_of(legend, labels[0]) == "map");
   CHECK(text_of(legend, labels[1]) == "robot");
   CHECK(text_of(legend, labels[2]) == "areas");
   CHECK(attr(swatches[0], "stroke") == "gray");
+  CHECK(attr(swatches[0], "d").ends_with("h0"));
   CHECK(attr(swatches[1], "stroke") == "crimson");
-  CHECK(attr(swatches[2], "stroke") == "green");  // no stroke: the fill
+  CHECK(attr(swatches[1], "d").ends_with("h16"));
+  CHECK(attr(boxes[0], "fill") == "green");
+  CHECK(attr(boxes[0], "stroke") == "none");
+  // A line layer without a stroke colour shows its fill.
+  SvgDrawing only_fill;
+  only_fill.layer("x").polyline(std::vector<Point2d>{{0, 0}, {1, 1}},
+                                {.stroke = "none", .fill = "teal"});
+  CHECK(attr(tags_named(group(only_fill.str(), "legend"), "path").at(0), "stroke") == "teal");
   // Without the legend there is no legend group.
   SvgDrawing quiet(SvgOptions{.legend = false});
   quiet.layer("map").circle({0, 0}, 1.0);

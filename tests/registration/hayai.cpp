@@ -481,10 +481,23 @@ TEST_CASE("the tracker fuses odometry and falls back to it", "[registration][hay
     CHECK(r.source == HayaiIncrementSource::odometry);
     CHECK(r.increment == odometry);
     CHECK(t.pose().x == Approx(odometry.x));
-    // Without odometry the pose is kept and the failure reported.
-    const auto lost = t.track(cast(corridor, {0.1, 0.0, 0.0}, front_scan(181)));
+    // Without odometry the failure is reported and the last increment repeated...
+    const auto coasting = t.track(cast(corridor, {0.1, 0.0, 0.0}, front_scan(181)));
+    CHECK(coasting.match.status == HayaiStatus::featureless);
+    CHECK(coasting.source == HayaiIncrementSource::constant_velocity);
+    CHECK(coasting.increment == odometry);
+    CHECK(coasting.pose == compose(odometry, odometry));
+    CHECK(to_string(coasting.source) == "constant_velocity");
+    // ... or, on request, the pose is kept.
+    HayaiParams<double> keep;
+    keep.coast_on_failure = false;
+    HayaiTracker<double> still(keep);
+    still.track(cast(corridor, {}, front_scan(181)));
+    still.track(cast(corridor, {0.05, 0.0, 0.0}, front_scan(181)), odometry);
+    const auto lost = still.track(cast(corridor, {0.1, 0.0, 0.0}, front_scan(181)));
     CHECK(lost.source == HayaiIncrementSource::none);
-    CHECK(lost.pose == r.pose);
+    CHECK(lost.pose == still.pose());
+    CHECK(lost.pose.x == Approx(odometry.x));
     CHECK(to_string(lost.source) == "none");
   }
   SECTION("a HAYAI shift that contradicts the odometry is rejected by the gate") {
@@ -558,6 +571,11 @@ TEST_CASE("HAYAI rejects bad parameters and odometry with exact messages",
   CHECK_THROWS_WITH(register_hayai(LaserScand(), LaserScand(), p),
                     "rangenav: HayaiFeatureExtractor: argument 'min_matched_features' = 1 must be "
                     ">= 2");
+  p = {};
+  p.max_feature_sigma = 0.0;
+  CHECK_THROWS_WITH(HayaiMatcher<double>(p),
+                    "rangenav: HayaiMatcher: argument 'max_feature_sigma' = 0 must be finite and "
+                    "> 0");
   HayaiOdometryNoise<double> noise;
   noise.innovation_gate = 0.0;
   CHECK_THROWS_WITH(

@@ -142,6 +142,11 @@ TEST_CASE("pitching scanner: nodding motion and Eq. (3) geometry", "[sim][sensor
   const auto hits = scanner.cast(w, {0, 0, 0}, deg_to_rad(30.0));
   CHECK(hits[90].kind == SurfaceKind::floor);
   CHECK(hits[90].range == Approx(0.55 / std::sin(deg_to_rad(30.0))));
+  // Deterministic for a seed.
+  const PitchingScanner noisy;
+  std::mt19937 a(21), b(21);
+  CHECK(noisy.scan(w, {0.1, 0.2, 0.3}, 0.5, a).scan.ranges() ==
+        noisy.scan(w, {0.1, 0.2, 0.3}, 0.5, b).scan.ranges());
   PitchingScannerParams bad;
   bad.pitch_max = bad.pitch_min;
   CHECK_THROWS_AS(PitchingScanner(bad), invalid_argument);

@@ -322,31 +322,34 @@ void resize_pcd_cloud(const PcdHeader& h, const PcdLayout& l, Cloud<3, Scalar>& 
   if (l.has_normals) cloud.normals.resize(h.points);
 }
 
-/// Decodes fixed-size records: field slot s of point i is at base + s.offset * column_scale +
-/// i * stride (binary: stride = point size, column_scale = 1; binary_compressed: stride = the
-/// field's bytes, column_scale = the point count).
+/// Decodes fixed-size records. DATA binary: field s of point i is at base + i * point_size +
+/// s.offset. binary_compressed (columns): the field's column starts at base + s.offset * n, so
+/// point i's value is at base + s.offset * n + i * s.stride.
 template <class Scalar>
 void decode_pcd_records(const unsigned char* base, const PcdLayout& l, std::size_t point_size,
                         bool columns, Cloud<3, Scalar>& cloud) {
   const std::size_t n = cloud.points.size();
-  const auto at = [&](const PcdSlot& s, std::size_t i) {
-    return columns ? base + s.offset * n + i * s.stride : base + i * point_size + s.offset;
-  };
-  for (std::size_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k)
-      cloud.points[i][k] = load_as<Scalar>(at(l.xyz[static_cast<std::size_t>(k)], i),
-                                           l.xyz[static_cast<std::size_t>(k)].type);
+  const auto first = [&](const PcdSlot& s) { return base + s.offset * (columns ? n : 1); };
+  const auto step = [&](const PcdSlot& s) { return columns ? s.stride : point_size; };
+  for (Eigen::Index k = 0; k < 3; ++k) {
+    const PcdSlot& s = l.xyz[static_cast<std::size_t>(k)];
+    load_strided<Scalar>(first(s), step(s), n, s.type,
+                         [&](std::size_t i, Scalar v) { cloud.points[i][k] = v; });
+  }
   if (l.intensity.present)
-    for (std::size_t i = 0; i < n; ++i)
-      cloud.intensities[i] = load_as<float>(at(l.intensity, i), l.intensity.type);
+    load_strided<float>(first(l.intensity), step(l.intensity), n, l.intensity.type,
+                        [&](std::size_t i, float v) { cloud.intensities[i] = v; });
   if (l.color.present)
-    for (std::size_t i = 0; i < n; ++i)
-      cloud.colors[i] = unpack_pcd_color(load_le<std::uint32_t>(at(l.color, i)), l.color_has_alpha);
+    load_strided<std::uint32_t>(first(l.color), step(l.color), n, ValueType::uint32,
+                                [&](std::size_t i, std::uint32_t v) {
+                                  cloud.colors[i] = unpack_pcd_color(v, l.color_has_alpha);
+                                });
   if (l.has_normals)
-    for (std::size_t i = 0; i < n; ++i)
-      for (int k = 0; k < 3; ++k)
-        cloud.normals[i][k] = load_as<Scalar>(at(l.normal[static_cast<std::size_t>(k)], i),
-                                              l.normal[static_cast<std::size_t>(k)].type);
+    for (Eigen::Index k = 0; k < 3; ++k) {
+      const PcdSlot& s = l.normal[static_cast<std::size_t>(k)];
+      load_strided<Scalar>(first(s), step(s), n, s.type,
+                           [&](std::size_t i, Scalar v) { cloud.normals[i][k] = v; });
+    }
 }
 
 /// A packed colour token: an integer (PCL writes "rgb" as uint32 text even when its TYPE is F)
@@ -497,18 +500,23 @@ void write_pcd(const std::filesystem::path& path, const Cloud<3, Scalar>& cloud,
   const std::size_t coord = wide ? 8 : 4;
   const std::size_t n = cloud.size();
 
+  enum class Source { point, intensity, color, normal };
   struct Column {
     const char* name;
     std::size_t size;
     char type;
+    Source source;
+    Eigen::Index axis;
   };
-  std::vector<Column> columns{{"x", coord, 'F'}, {"y", coord, 'F'}, {"z", coord, 'F'}};
-  if (cloud.has_intensities()) columns.push_back({"intensity", 4, 'F'});
-  if (cloud.has_colors()) columns.push_back({"rgba", 4, 'U'});
+  std::vector<Column> columns{{"x", coord, 'F', Source::point, 0},
+                              {"y", coord, 'F', Source::point, 1},
+                              {"z", coord, 'F', Source::point, 2}};
+  if (cloud.has_intensities()) columns.push_back({"intensity", 4, 'F', Source::intensity, 0});
+  if (cloud.has_colors()) columns.push_back({"rgba", 4, 'U', Source::color, 0});
   if (cloud.has_normals()) {
-    columns.push_back({"normal_x", coord, 'F'});
-    columns.push_back({"normal_y", coord, 'F'});
-    columns.push_back({"normal_z", coord, 'F'});
+    columns.push_back({"normal_x", coord, 'F', Source::normal, 0});
+    columns.push_back({"normal_y", coord, 'F', Source::normal, 1});
+    columns.push_back({"normal_z", coord, 'F', Source::normal, 2});
   }
   std::string out = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS";
   for (const auto& c : columns)
@@ -527,25 +535,23 @@ void write_pcd(const std::filesystem::path& path, const Cloud<3, Scalar>& cloud,
   out.append("\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS ").append(std::to_string(n));
   out.append("\nDATA ").append(pcd_format_name(format)).append("\n");
 
-  // Each column's values for point i, in the file's order; `emit(v)` receives float / double /
-  // uint32 values.
-  const auto for_each_value = [&](std::size_t column, std::size_t i, auto&& emit) {
-    const std::size_t axis = column < 3 ? column : column - (columns.size() - 3);
+  // Column c's value for point i, handed to emit as float, double or uint32.
+  const auto visit = [&](const Column& c, std::size_t i, auto&& emit) {
     const auto coordinate = [&](Scalar v) {
       if (wide)
         emit(static_cast<double>(v));
       else
         emit(static_cast<float>(v));
     };
-    const std::string_view name = columns[column].name;
-    if (column < 3) {
-      coordinate(cloud.points[i][Eigen::Index(axis)]);
-    } else if (name == "intensity") {
-      emit(cloud.intensities[i]);
-    } else if (name == "rgba") {
-      emit(pack_pcd_color(cloud.colors[i]));
-    } else {
-      coordinate(cloud.normals[i][Eigen::Index(axis)]);
+    switch (c.source) {
+      case Source::point:
+        return coordinate(cloud.points[i][c.axis]);
+      case Source::intensity:
+        return emit(cloud.intensities[i]);
+      case Source::color:
+        return emit(pack_pcd_color(cloud.colors[i]));
+      case Source::normal:
+        return coordinate(cloud.normals[i][c.axis]);
     }
   };
 
@@ -553,37 +559,39 @@ void write_pcd(const std::filesystem::path& path, const Cloud<3, Scalar>& cloud,
     for (std::size_t i = 0; i < n; ++i) {
       for (std::size_t c = 0; c < columns.size(); ++c) {
         if (c != 0) out.push_back(' ');
-        for_each_value(c, i, [&](auto v) { append_number(out, v); });
+        visit(columns[c], i, [&](auto v) { append_number(out, v); });
       }
       out.push_back('\n');
     }
-  } else {
-    std::string records;
-    std::size_t point_size = 0;
-    for (const auto& c : columns)
-      point_size += c.size;
-    records.reserve(point_size * n);
-    const auto emit = [&](auto v) { append_le(records, v); };
-    if (format == PcdFormat::binary) {
-      for (std::size_t i = 0; i < n; ++i)
-        for (std::size_t c = 0; c < columns.size(); ++c)
-          for_each_value(c, i, emit);
-      out.append(records);
-    } else {
-      for (std::size_t c = 0; c < columns.size(); ++c)
-        for (std::size_t i = 0; i < n; ++i)
-          for_each_value(c, i, emit);
-      std::vector<std::uint8_t> packed;
-      lzf_compress(reinterpret_cast<const std::uint8_t*>(records.data()), records.size(), packed);
-      if (packed.size() > 0xffffffffu || records.size() > 0xffffffffu)
-        rangenav::detail::throw_invalid_argument(
-            "write_pcd", "cloud.size()", n, "is too large for binary_compressed (4 GiB limit)");
-      append_le(out, static_cast<std::uint32_t>(packed.size()));
-      append_le(out, static_cast<std::uint32_t>(records.size()));
-      out.append(reinterpret_cast<const char*>(packed.data()), packed.size());
-    }
+    return write_whole_file(pcd, path, out);
   }
-  write_whole_file(pcd, path, out);
+  std::size_t point_size = 0;
+  for (const auto& c : columns)
+    point_size += c.size;
+  std::vector<unsigned char> records(point_size * n);
+  unsigned char* p = records.data();
+  const auto put = [&p](auto v) {
+    store_le(p, v);
+    p += sizeof(v);
+  };
+  if (format == PcdFormat::binary) {
+    for (std::size_t i = 0; i < n; ++i)
+      for (const auto& c : columns)
+        visit(c, i, put);
+    return write_whole_file(pcd, path, out,
+                            {reinterpret_cast<const char*>(records.data()), records.size()});
+  }
+  for (const auto& c : columns)  // binary_compressed: column after column
+    for (std::size_t i = 0; i < n; ++i)
+      visit(c, i, put);
+  std::vector<std::uint8_t> packed;
+  lzf_compress(records.data(), records.size(), packed);
+  if (packed.size() > 0xffffffffu || records.size() > 0xffffffffu)
+    rangenav::detail::throw_invalid_argument("write_pcd", "cloud.size()", n,
+                                             "is too large for binary_compressed (4 GiB limit)");
+  append_le(out, static_cast<std::uint32_t>(packed.size()));
+  append_le(out, static_cast<std::uint32_t>(records.size()));
+  write_whole_file(pcd, path, out, {reinterpret_cast<const char*>(packed.data()), packed.size()});
 }
 
 }  // namespace rangenav::io

@@ -10,7 +10,9 @@
 // The file's user units are metres with y negated (SVG's y points down), so a coordinate read
 // in the file is the world coordinate, up to the sign of y; numbers are written with as many
 // decimals as a tenth of a pixel needs, which keeps a 100k-point drawing near 2 MB. Line widths,
-// point radii and font sizes are given in pixels and do not depend on the zoom.
+// point radii and font sizes are given in pixels and do not depend on the zoom. Text and the
+// footer are written in pixel units under a `translate(..) scale(1/pixels-per-metre)` transform:
+// renderers such as librsvg garble glyphs whose font size is a fraction of a user unit.
 //
 //   rangenav::io::SvgDrawing svg;
 //   svg.layer("map").points(map_cloud, {.stroke = "#444"});
@@ -335,14 +337,14 @@ class SvgDrawing {
     size(out, f, f.height_px);
     out += "\" font-family=\"sans-serif\" stroke-linecap=\"round\" stroke-linejoin=\"round\">\n";
     if (options_.background != "none") {
-      out += "<rect x=\"";
-      num(out, f, f.x0);
+      out += "<rect x=\"";  // exactly the view box
+      size(out, f, f.x0 * f.scale);
       out += "\" y=\"";
-      num(out, f, f.y0);
+      size(out, f, f.y0 * f.scale);
       out += "\" width=\"";
-      num(out, f, f.width_px / f.scale);
+      size(out, f, f.width_px);
       out += "\" height=\"";
-      num(out, f, f.height_px / f.scale);
+      size(out, f, f.height_px);
       out += "\" fill=\"";
       detail::append_escaped(out, options_.background);
       out += "\"/>\n";
@@ -741,19 +743,41 @@ class SvgDrawing {
         text_at(scale_bar, x_end + 6, y + 4, detail::length_label(f.scale_bar_m));
         return;
       }
-      // A thick swatch in the colour of the layer's first shape, then the layer's name.
-      const Style& first = std::find_if(elements_.begin(), elements_.end(), [&](const Element& e) {
-                             return e.layer == l;
-                           })->style;
-      const std::string& colour =
-          first.stroke != "none" || first.fill == "none" ? first.stroke : first.fill;
-      legend += "<path d=\"M";
-      px(legend, x);
-      legend += ' ';
-      px(legend, y);
-      legend += "h16\" stroke=\"";
-      detail::append_escaped(legend, colour);
-      legend += "\" stroke-width=\"4\" fill=\"none\"/>\n";
+      // A swatch that looks like the layer's first shape: a dot for points, a filled box for
+      // filled areas, else a thick line; then the layer's name.
+      const Element& first = *std::find_if(elements_.begin(), elements_.end(),
+                                           [&](const Element& e) { return e.layer == l; });
+      const Style& style = first.style;
+      const bool area =
+          (first.kind == Kind::polygon || first.kind == Kind::circle) && style.fill != "none";
+      if (area) {
+        legend += "<rect x=\"";
+        px(legend, x + 1);
+        legend += "\" y=\"";
+        px(legend, y - 5);
+        legend += "\" width=\"14\" height=\"10\" fill=\"";
+        detail::append_escaped(legend, style.fill);
+        legend += "\" stroke=\"";
+        detail::append_escaped(legend, style.stroke);
+        legend += '"';
+      } else {
+        const bool dot = first.kind == Kind::points;
+        legend += "<path d=\"M";
+        px(legend, dot ? x + 8 : x);
+        legend += ' ';
+        px(legend, y);
+        legend += dot ? "h0" : "h16";
+        legend += "\" stroke=\"";
+        detail::append_escaped(legend, style.stroke != "none" ? style.stroke : style.fill);
+        legend += dot ? "\" stroke-width=\"7\"" : "\" stroke-width=\"4\"";
+        legend += " fill=\"none\"";
+      }
+      if (style.opacity < 1.0) {
+        legend += " opacity=\"";
+        detail::append_number(legend, std::max(style.opacity, 0.3), 3);
+        legend += '"';
+      }
+      legend += "/>\n";
       text_at(legend, x + 22, y + 4, layers_[l].name);
     });
     out += "<g id=\"footer\" ";

@@ -111,6 +111,9 @@ struct HayaiParams {
   Scalar max_line_rms{Scalar(0.02)};
   /// Smallest angle between the two fitted lines for a corner (rad).
   Scalar min_corner_angle{deg_to_rad(Scalar(30))};
+  /// ... and the sine of that angle must exceed this many standard deviations of the lines'
+  /// directions (short, noisy fits near the scanner turn at random).
+  Scalar corner_significance{Scalar(3)};
   /// Largest distance between the corner candidate's beam point and the lines' intersection (m).
   Scalar max_corner_shift{Scalar(0.3)};
   /// Place corners at the lines' intersection (true) or at the candidate's beam point (false, as
@@ -127,6 +130,9 @@ struct HayaiParams {
   std::size_t min_segment_beams{3};
   /// Also use the far (shadow) side of jump edges as features (moves with the viewpoint).
   bool use_shadow_edges{false};
+  /// Features located worse than this σ are dropped (m): the end of a wall seen at a grazing
+  /// angle, where the beams lie far apart, slides along the wall from scan to scan.
+  Scalar max_feature_sigma{Scalar(0.1)};
 
   // ---- matching, Eq. (4) ----
   /// ω1: weight of the bearing difference (m/rad), inside the polar root.
@@ -151,6 +157,9 @@ struct HayaiParams {
   /// predicted (not in the paper, whose 75 Hz scans turn little between scans).
   Scalar recovery_rotation_max{deg_to_rad(Scalar(12))};
   Scalar recovery_rotation_step{deg_to_rad(Scalar(3))};
+  /// Without odometry, a scan HAYAI cannot register moves the pose by the constant-velocity
+  /// prediction (the failure is still reported); false keeps the pose instead.
+  bool coast_on_failure{true};
   /// Range noise of the scanner (m): the smallest σ of a feature's position, which weights the
   /// pairs in Eq. (5-6) and scales the pose covariance.
   Scalar min_feature_sigma{Scalar(0.01)};
@@ -165,6 +174,7 @@ struct HayaiParams {
           min_corner_angle <= std::numbers::pi_v<Scalar> / 2))
       detail::throw_invalid_argument(where, "min_corner_angle", min_corner_angle,
                                      "must be in (0, pi/2]");
+    detail::require_non_negative(where, "corner_significance", corner_significance);
     detail::require_positive(where, "max_corner_shift", max_corner_shift);
     detail::require_positive(where, "jump_distance_min", jump_distance_min);
     detail::require_non_negative(where, "jump_distance_ratio", jump_distance_ratio);
@@ -182,6 +192,7 @@ struct HayaiParams {
       detail::throw_invalid_argument(where, "min_matched_features", min_matched_features,
                                      "must be >= 2");
     detail::require_positive(where, "min_feature_sigma", min_feature_sigma);
+    detail::require_positive(where, "max_feature_sigma", max_feature_sigma);
     detail::require_non_negative(where, "recovery_rotation_max", recovery_rotation_max);
     detail::require_non_negative(where, "recovery_rotation_step", recovery_rotation_step);
   }
@@ -243,7 +254,8 @@ template <class Scalar>
 struct HayaiLine {
   Point<2, Scalar> centroid;
   Point<2, Scalar> direction;
-  Scalar rms;
+  Scalar rms;     ///< RMS distance of the points from the line
+  Scalar spread;  ///< standard deviation of the points along the line
 };
 
 template <class Scalar>
@@ -262,7 +274,8 @@ HayaiLine<Scalar> fit_hayai_line(std::span<const Point<2, Scalar>> points, std::
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, 2, 2>> eig;
   eig.computeDirect(cov);  // eigenvalues increasing: the largest spans the line
   const Scalar residual_sq = std::max(eig.eigenvalues()(0), Scalar(0));
-  return {c, eig.eigenvectors().col(1), std::sqrt(residual_sq)};
+  return {c, eig.eigenvectors().col(1), std::sqrt(residual_sq),
+          std::sqrt(std::max(eig.eigenvalues()(1), Scalar(0)))};
 }
 
 }  // namespace detail
@@ -436,7 +449,8 @@ class HayaiFeatureExtractor {
         if (t > 0 && (moved - position).norm() <= spacing) position = moved;
       }
     }
-    features.push_back(make_feature(position, type, end_beam, true, sigma));
+    if (sigma <= params_.max_feature_sigma)
+      features.push_back(make_feature(position, type, end_beam, true, sigma));
   }
 
   // Corners inside the segment [begin, end): the filter chain of §3.1 on the polar signal, then
@@ -468,6 +482,7 @@ class HayaiFeatureExtractor {
 
     const Scalar sin_min_angle = std::sin(params_.min_corner_angle);
     const Scalar fit_factor = std::sqrt(Scalar(2) / static_cast<Scalar>(fit));
+    const Scalar sqrt_fit = std::sqrt(static_cast<Scalar>(fit));
     // In a padded ring only the middle copy of each beam may become a feature.
     const std::size_t first = std::max(begin + fit + 1, pad_);
     const std::size_t last = std::min(end - fit - 2, r_.size() - pad_ - 1);
@@ -486,6 +501,12 @@ class HayaiFeatureExtractor {
       const Scalar cross =
           left.direction.x() * right.direction.y() - left.direction.y() * right.direction.x();
       if (std::abs(cross) < sin_min_angle) continue;
+      // σ of a fitted direction: the noise across the line over its length (spread · √fit).
+      const Scalar noise = std::max({left.rms, right.rms, params_.min_feature_sigma});
+      const Scalar sigma_left = noise / (left.spread * sqrt_fit);
+      const Scalar sigma_right = noise / (right.spread * sqrt_fit);
+      if (!(std::abs(cross) >= params_.corner_significance * std::hypot(sigma_left, sigma_right)))
+        continue;
       // left.centroid + t·left.direction = right.centroid + u·right.direction.
       const Point<2, Scalar> diff = right.centroid - left.centroid;
       const Scalar t = (diff.x() * right.direction.y() - diff.y() * right.direction.x()) / cross;
@@ -498,7 +519,6 @@ class HayaiFeatureExtractor {
                                     : before < 0 && after > 0 ? HayaiFeatureType::minimum
                                                               : HayaiFeatureType::inflection;
       // σ of two fitted lines' intersection: the fits' noise over √(fit/2), over sin(angle).
-      const Scalar noise = std::max({left.rms, right.rms, params_.min_feature_sigma});
       const Scalar sigma = noise * fit_factor / std::abs(cross);
       if (params_.refine_corners)
         features.push_back(make_feature(corner, type, i, false, sigma));
@@ -805,7 +825,8 @@ enum class HayaiIncrementSource : std::uint8_t {
   hayai,       ///< HAYAI's Δp alone (no odometry given)
   fused,       ///< HAYAI's Δp fused with the odometry increment by the EKF
   odometry,    ///< odometry alone: HAYAI failed or its Δp was rejected by the innovation gate
-  none         ///< HAYAI failed and no odometry was given: the pose is unchanged
+  constant_velocity,  ///< HAYAI failed, no odometry: the previous increment was repeated
+  none                ///< HAYAI failed, no odometry, coast_on_failure off: the pose is unchanged
 };
 
 [[nodiscard]] constexpr std::string_view to_string(HayaiIncrementSource source) {
@@ -818,6 +839,8 @@ enum class HayaiIncrementSource : std::uint8_t {
       return "fused";
     case HayaiIncrementSource::odometry:
       return "odometry";
+    case HayaiIncrementSource::constant_velocity:
+      return "constant_velocity";
     case HayaiIncrementSource::none:
       return "none";
   }
@@ -913,6 +936,10 @@ class HayaiTracker {
       result.source = HayaiIncrementSource::odometry;
       result.increment = *odometry;
       increment_cov = noise_.covariance(*odometry);
+    } else if (matcher_.params().coast_on_failure) {
+      result.source = HayaiIncrementSource::constant_velocity;
+      result.increment = velocity_;
+      increment_cov = noise_.covariance(velocity_);
     } else {
       // Nothing to move by: the pose stays, the failure is reported, and the scan becomes the
       // reference all the same (step 5; an older reference would only drift further away).

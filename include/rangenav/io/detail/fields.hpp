@@ -59,11 +59,13 @@ inline std::string read_whole_file(std::string_view format, const std::filesyste
   return bytes;
 }
 
+/// Writes head then body (a text header and a binary block) to a new file.
 inline void write_whole_file(std::string_view format, const std::filesystem::path& path,
-                             std::string_view bytes) {
+                             std::string_view head, std::string_view body = {}) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) throw_io(format, path, 0, "cannot open file for writing");
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  out.write(head.data(), static_cast<std::streamsize>(head.size()));
+  out.write(body.data(), static_cast<std::streamsize>(body.size()));
   out.flush();
   if (!out) throw_io(format, path, 0, "cannot write file");
 }
@@ -164,6 +166,39 @@ Out load_as(const unsigned char* p, ValueType t) {
   return Out{};
 }
 
+/// Calls store(i, value) for the n values of type t at src, src + stride, ..., each converted to
+/// Out. The switch on the type sits outside the loop.
+template <class Out, class Store>
+void load_strided(const unsigned char* src, std::size_t stride, std::size_t n, ValueType t,
+                  Store&& store) {
+  const auto loop = [&]<class T>(std::type_identity<T>) {
+    for (std::size_t i = 0; i < n; ++i)
+      store(i, static_cast<Out>(load_le<T>(src + i * stride)));
+  };
+  switch (t) {
+    case ValueType::int8:
+      return loop(std::type_identity<std::int8_t>{});
+    case ValueType::uint8:
+      return loop(std::type_identity<std::uint8_t>{});
+    case ValueType::int16:
+      return loop(std::type_identity<std::int16_t>{});
+    case ValueType::uint16:
+      return loop(std::type_identity<std::uint16_t>{});
+    case ValueType::int32:
+      return loop(std::type_identity<std::int32_t>{});
+    case ValueType::uint32:
+      return loop(std::type_identity<std::uint32_t>{});
+    case ValueType::int64:
+      return loop(std::type_identity<std::int64_t>{});
+    case ValueType::uint64:
+      return loop(std::type_identity<std::uint64_t>{});
+    case ValueType::float32:
+      return loop(std::type_identity<float>{});
+    case ValueType::float64:
+      return loop(std::type_identity<double>{});
+  }
+}
+
 /// An integer or floating-point value converted to 0..255 with saturation (NaN gives 0).
 template <class T>
 std::uint8_t saturate_u8(T v) {
@@ -176,14 +211,6 @@ std::uint8_t saturate_u8(T v) {
     if (v >= T(255)) return 255;
     return static_cast<std::uint8_t>(v);
   }
-}
-
-/// The value of type t at p as a colour channel (saturated to 0..255).
-inline std::uint8_t load_channel(const unsigned char* p, ValueType t) {
-  if (t == ValueType::uint8) return *p;
-  if (is_floating(t)) return saturate_u8(load_as<double>(p, t));
-  if (t == ValueType::uint64) return saturate_u8(load_le<std::uint64_t>(p));
-  return saturate_u8(load_as<std::int64_t>(p, t));
 }
 
 // ---- text -----------------------------------------------------------------------------------

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -105,8 +106,13 @@ inline std::size_t lzf_decompress(const std::uint8_t* in, std::size_t n, std::ui
       const std::size_t back = ((ctrl & 0x1fu) << 8) + in[ip++] + 1;
       len += 2;
       if (back > op || len > capacity - op) return lzf_error;
-      for (std::size_t k = 0; k < len; ++k, ++op)
-        out[op] = out[op - back];
+      if (back >= len) {  // source and destination do not overlap
+        std::memcpy(out + op, out + op - back, len);
+        op += len;
+      } else {  // a repeating pattern: copy byte by byte, re-reading what was just written
+        for (std::size_t k = 0; k < len; ++k, ++op)
+          out[op] = out[op - back];
+      }
     }
   }
   return op;
