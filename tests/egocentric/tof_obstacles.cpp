@@ -135,3 +135,17 @@ TEST_CASE("fusion: laser scan and ToF virtual scan in one obstacle map", "[egoce
   map2.insert(detector.virtual_scan(), PlanarMount<double>{Pose2d{}, 0.1});
   CHECK(map2.bin(map2.bin_index(0.0)).range == Approx(1.2).margin(0.05));
 }
+
+TEST_CASE("organised clouds (RGB-D frames) go through the same detection", "[egocentric][tof]") {
+  auto img = render(Scene{}, 0.005);
+  apply_median_filter(img);
+  HeightImageObstacleDetector<double> from_image, from_cloud;
+  const std::size_t n = from_image.detect(img, camera_extrinsics());
+  CHECK(from_cloud.detect(to_organized_cloud(img), camera_extrinsics()) == n);
+  CHECK(from_cloud.obstacle_mask() == from_image.obstacle_mask());
+  const auto scan = from_cloud.virtual_scan();
+  REQUIRE(scan.size() == 176);
+  CHECK(scan.range(88) == Approx(1.2).margin(0.05));
+  CHECK_THROWS_WITH(from_cloud.detect(Cloud3d{}, camera_extrinsics()),
+                    "rangenav: HeightImageObstacleDetector::detect: the cloud is empty");
+}

@@ -1,6 +1,9 @@
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
+#include <random>
+#include <vector>
 
 #include "rangenav/core/angles.hpp"
 #include "rangenav/scan/tof_filters.hpp"
@@ -93,4 +96,31 @@ TEST_CASE("jump-edge filter (Eq. 13-14) removes mixed pixels and keeps real edge
   CHECK_THROWS_WITH(filter.filter(small),
                     "rangenav: JumpEdgeFilter::filter: argument 'image.width()' = 4 and height "
                     "must match the filter's intrinsics");
+}
+
+TEST_CASE("median filter equals the brute-force median of the valid window", "[scan][tof]") {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(0.5, 4.0);
+  std::uniform_real_distribution<double> coin(0.0, 1.0);
+  DepthImage<double> img;
+  img.intrinsics = PinholeIntrinsics<double>::from_fov(23, 17, 1.0, 1.0);
+  img.depth.resize(23 * 17);
+  for (auto& d : img.depth)
+    d = coin(rng) < 0.08 ? kNaN : u(rng);
+  const auto in = img.depth;
+  apply_median_filter(img);
+  for (std::size_t r = 0; r < 17; ++r)
+    for (std::size_t c = 0; c < 23; ++c) {
+      const double d = in[r * 23 + c];
+      if (std::isnan(d)) {
+        REQUIRE(std::isnan(img.depth[r * 23 + c]));
+        continue;
+      }
+      std::vector<double> win;
+      for (std::size_t rr = r == 0 ? 0 : r - 1; rr <= std::min<std::size_t>(r + 1, 16); ++rr)
+        for (std::size_t cc = c == 0 ? 0 : c - 1; cc <= std::min<std::size_t>(c + 1, 22); ++cc)
+          if (!std::isnan(in[rr * 23 + cc])) win.push_back(in[rr * 23 + cc]);
+      std::sort(win.begin(), win.end());
+      REQUIRE(img.depth[r * 23 + c] == win[(win.size() - 1) / 2]);
+    }
 }

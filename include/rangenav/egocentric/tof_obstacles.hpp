@@ -23,6 +23,7 @@
 #include <limits>
 #include <vector>
 
+#include "rangenav/core/cloud.hpp"
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/egocentric/floor.hpp"
@@ -83,7 +84,6 @@ class HeightImageObstacleDetector {
     constexpr Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
     update_rays(image);
     points_.resize(n);
-    obstacle_.assign(n, 0);
     const Eigen::Matrix<Scalar, 3, 3> rot = extrinsics.linear();
     const Point<3, Scalar> t = extrinsics.translation();
     for (std::size_t i = 0; i < n; ++i) {
@@ -92,33 +92,30 @@ class HeightImageObstacleDetector {
                        ? Point<3, Scalar>(rot * (d * rays_[i]) + t)
                        : Point<3, Scalar>::Constant(nan);
     }
-    const Point<3, Scalar> origin = extrinsics.translation();
-    obstacle_points_.clear();
-    obstacle_points_.reserve(n);
-    for (std::size_t r = 0; r < h; ++r)
-      for (std::size_t c = 0; c < w; ++c) {
-        const std::size_t i = r * w + c;
-        const Point<3, Scalar>& p = points_[i];
-        if (!p.allFinite()) continue;
-        if (p.z() < -params_.below_floor) {  // a hole or descending stair: §4.2
-          if (const auto q = floor_intersection(origin, p)) {
-            obstacle_[i] = 1;
-            obstacle_points_.push_back(*q);
-          }
-          continue;
-        }
-        Scalar lo, hi;
-        detail::window_height_range(std::span<const Point<3, Scalar>>(points_), w, h, r, c,
-                                    params_.window_radius, params_.window_steps,
-                                    params_.below_floor, lo, hi, p.z() - params_.epsilon_h);
-        if (p.z() - lo > params_.epsilon_h && p.z() >= params_.z_min &&
-            p.z() <= params_.z_max) {  // Eq. (15), inside the corridor
-          obstacle_[i] = 1;
-          obstacle_points_.push_back(p);
-        }
-      }
-    build_virtual_scan(image, extrinsics);
-    return obstacle_points_.size();
+    const auto& in = image.intrinsics;
+    const Point<3, Scalar> axis = extrinsics.linear().col(0);
+    const Scalar fov = std::atan((static_cast<Scalar>(w) / 2) / in.fx) * 2;
+    return detect_points(w, h, extrinsics.translation(), std::atan2(axis.y(), axis.x()), fov);
+  }
+
+  /// The same for an organised cloud (e.g. an RGB-D frame; invalid points NaN) given in the
+  /// camera body frame. The virtual scan then spans the bearings of the cloud's valid points.
+  std::size_t detect(const Cloud<3, Scalar>& cloud, const Transform<3, Scalar>& extrinsics) {
+    cloud.validate("HeightImageObstacleDetector::detect");
+    if (cloud.empty())
+      detail::throw_invalid("HeightImageObstacleDetector::detect", "the cloud is empty");
+    points_.resize(cloud.size());
+    Scalar lo = std::numeric_limits<Scalar>::infinity(), hi = -lo;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      points_[i] = extrinsics * cloud.points[i];
+      if (!points_[i].allFinite()) continue;
+      const Scalar b = std::atan2(points_[i].y(), points_[i].x());
+      lo = std::min(lo, b);
+      hi = std::max(hi, b);
+    }
+    if (!(hi > lo)) lo = hi = 0;
+    const Scalar fov = std::max(hi - lo, Scalar(1e-6)) * (Scalar(1) + Scalar(1e-9));
+    return detect_points(cloud.width, cloud.height, extrinsics.translation(), (lo + hi) / 2, fov);
   }
 
   /// The image's points in the robot frame, organised (row-major), NaN where invalid.
@@ -139,6 +136,92 @@ class HeightImageObstacleDetector {
   [[nodiscard]] const ScanGeometry<Scalar>& virtual_scan_geometry() const { return scan_geometry_; }
 
  private:
+  // Eq. (15) on points_ (w x h, robot frame) and the virtual scan over [yaw - fov/2, yaw + fov/2].
+  std::size_t detect_points(std::size_t w, std::size_t h, const Point<3, Scalar>& origin,
+                            Scalar yaw, Scalar fov) {
+    const std::size_t n = w * h;
+    constexpr Scalar inf = std::numeric_limits<Scalar>::infinity();
+    constexpr Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
+    obstacle_.assign(n, 0);
+    obstacle_points_.clear();
+    obstacle_points_.reserve(n);
+    // Structure of arrays for the window test: heights that count (+inf: invalid or below floor)
+    // and the horizontal position (NaN: invalid).
+    zc_.resize(n);
+    x_.resize(n);
+    y_.resize(n);
+    moore_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Point<3, Scalar>& p = points_[i];
+      const bool valid = p.allFinite();
+      x_[i] = valid ? p.x() : nan;
+      y_[i] = valid ? p.y() : nan;
+      zc_[i] = valid && p.z() >= -params_.below_floor ? p.z() : inf;
+    }
+    // The Moore-neighbourhood minimum, separably: along the rows into moore_, then the columns.
+    for (std::size_t r = 0; r < h; ++r) {
+      const Scalar* z = &zc_[r * w];
+      Scalar* m = &moore_[r * w];
+      for (std::size_t c = 0; c < w; ++c) {
+        Scalar v = z[c];
+        if (c > 0) v = std::min(v, z[c - 1]);
+        if (c + 1 < w) v = std::min(v, z[c + 1]);
+        m[c] = v;
+      }
+    }
+    col_.resize(w);
+    std::vector<Scalar>& above = col_;  // the previous row's row minima
+    for (std::size_t r = 0; r < h; ++r) {
+      Scalar* m = &moore_[r * w];
+      for (std::size_t c = 0; c < w; ++c) {
+        const Scalar here = m[c];
+        Scalar v = here;
+        if (r > 0) v = std::min(v, above[c]);
+        if (r + 1 < h) v = std::min(v, moore_[(r + 1) * w + c]);
+        above[c] = here;
+        m[c] = v;
+      }
+    }
+    const Scalar radius_sq = params_.window_radius * params_.window_radius;
+    const auto steps = static_cast<std::ptrdiff_t>(params_.window_steps);
+    const auto hh = static_cast<std::ptrdiff_t>(h);
+    for (std::size_t r = 0; r < h; ++r)
+      for (std::size_t c = 0; c < w; ++c) {
+        const std::size_t i = r * w + c;
+        const Point<3, Scalar>& p = points_[i];
+        if (!p.allFinite()) continue;
+        const Scalar z = p.z();
+        if (z < -params_.below_floor) {  // a hole or descending stair: §4.2
+          if (const auto q = floor_intersection(origin, p)) {
+            obstacle_[i] = 1;
+            obstacle_points_.push_back(*q);
+          }
+          continue;
+        }
+        if (z < params_.z_min || z > params_.z_max) continue;  // outside the corridor
+        // Eq. (15) on W = Moore neighbourhood + the column within window_radius: is the point
+        // more than ε_H above the lowest point of W?
+        const Scalar threshold = z - params_.epsilon_h;
+        Scalar lo = moore_[i];
+        for (int dir = -1; dir <= 1 && !(lo < threshold); dir += 2)
+          for (std::ptrdiff_t k = 2; k <= steps; ++k) {
+            const std::ptrdiff_t rr = static_cast<std::ptrdiff_t>(r) + dir * k;
+            if (rr < 0 || rr >= hh) break;
+            const std::size_t j = static_cast<std::size_t>(rr) * w + c;
+            const Scalar dx = x_[j] - x_[i], dy = y_[j] - y_[i];
+            if (dx * dx + dy * dy > radius_sq) break;  // NaN (invalid): not a break
+            lo = std::min(lo, zc_[j]);
+            if (lo < threshold) break;
+          }
+        if (lo < threshold) {
+          obstacle_[i] = 1;
+          obstacle_points_.push_back(p);
+        }
+      }
+    build_virtual_scan(w, yaw, fov);
+    return obstacle_points_.size();
+  }
+
   // The body-frame ray of every pixel, scaled so that depth * ray is the point; recomputed only
   // when the intrinsics or the depth kind change.
   void update_rays(const DepthImage<Scalar>& image) {
@@ -155,13 +238,7 @@ class HeightImageObstacleDetector {
     rays_kind_ = image.kind;
   }
 
-  void build_virtual_scan(const DepthImage<Scalar>& image, const Transform<3, Scalar>& extr) {
-    const auto& in = image.intrinsics;
-    const std::size_t w = in.width;
-    // The camera's heading in the robot frame and its horizontal aperture.
-    const Point<3, Scalar> axis = extr.linear().col(0);
-    const Scalar yaw = std::atan2(axis.y(), axis.x());
-    const Scalar fov = std::atan((static_cast<Scalar>(w) / 2) / in.fx) * 2;
+  void build_virtual_scan(std::size_t w, Scalar yaw, Scalar fov) {
     const Scalar inc = fov / static_cast<Scalar>(w);
     scan_geometry_ =
         ScanGeometry<Scalar>{yaw - fov / 2 + inc / 2, inc, w, Scalar(0), params_.max_range};
@@ -181,6 +258,7 @@ class HeightImageObstacleDetector {
   PinholeIntrinsics<Scalar> rays_for_{};
   DepthKind rays_kind_{DepthKind::radial};
   std::vector<Point<3, Scalar>> points_;
+  std::vector<Scalar> zc_, x_, y_, moore_, col_;
   std::vector<std::uint8_t> obstacle_;
   std::vector<Point<3, Scalar>> obstacle_points_;
   ScanGeometry<Scalar> scan_geometry_{};

@@ -52,60 +52,64 @@ std::size_t apply_amplitude_threshold(DepthImage<Scalar>& image, Scalar threshol
 template <std::floating_point Scalar>
 void apply_median_filter(DepthImage<Scalar>& image, std::vector<Scalar>& scratch) {
   image.validate("apply_median_filter");
-  const std::size_t w = image.width(), h = image.height();
-  scratch.assign(image.depth.begin(), image.depth.end());
-  Scalar window[9];
-  const auto valid = [](Scalar d) { return DepthImage<Scalar>::is_valid_depth(d); };
-  for (std::size_t r = 0; r < h; ++r)
-    for (std::size_t c = 0; c < w; ++c) {
-      if (!valid(scratch[r * w + c])) continue;
-      int n = 0;
-      if (r > 0 && c > 0 && r + 1 < h && c + 1 < w) {  // interior: try the full window
-        const Scalar* row0 = &scratch[(r - 1) * w + c - 1];
-        const Scalar* row1 = row0 + w;
-        const Scalar* row2 = row1 + w;
-        for (int k = 0; k < 3; ++k) {
-          window[n] = row0[k];
-          n += valid(row0[k]) ? 1 : 0;
-          window[n] = row1[k];
-          n += valid(row1[k]) ? 1 : 0;
-          window[n] = row2[k];
-          n += valid(row2[k]) ? 1 : 0;
-        }
-        if (n == 9) {  // the median of nine by the 19-exchange network (Paeth / Devillard)
-          auto sort2 = [&](int a, int b) {
-            const Scalar lo = std::min(window[a], window[b]);
-            window[b] = std::max(window[a], window[b]);
-            window[a] = lo;
-          };
-          sort2(1, 2), sort2(4, 5), sort2(7, 8), sort2(0, 1), sort2(3, 4), sort2(6, 7);
-          sort2(1, 2), sort2(4, 5), sort2(7, 8), sort2(0, 3), sort2(5, 8), sort2(4, 7);
-          sort2(3, 6), sort2(1, 4), sort2(2, 5), sort2(4, 7), sort2(4, 2), sort2(6, 4);
-          sort2(4, 2);
-          image.depth[r * w + c] = window[4];
-          continue;
-        }
-      } else {
-        const std::size_t r0 = r == 0 ? 0 : r - 1, r1 = std::min(r + 1, h - 1);
-        const std::size_t c0 = c == 0 ? 0 : c - 1, c1 = std::min(c + 1, w - 1);
-        for (std::size_t rr = r0; rr <= r1; ++rr)
-          for (std::size_t cc = c0; cc <= c1; ++cc) {
-            const Scalar d = scratch[rr * w + cc];
-            if (valid(d)) window[n++] = d;
-          }
+  const std::size_t w = image.width(), h = image.height(), n = w * h;
+  // scratch: a copy of the input, then per column of the current row triple its sorted values
+  // (lo, mid, hi) and whether all three are valid.
+  scratch.resize(n + 4 * w);
+  std::copy(image.depth.begin(), image.depth.end(), scratch.begin());
+  const Scalar* in = scratch.data();
+  Scalar* lo = scratch.data() + n;
+  Scalar* mid = lo + w;
+  Scalar* hi = mid + w;
+  Scalar* full = hi + w;  // 1 when the column's three values are valid
+  const auto valid = [](Scalar d) {
+    return d > Scalar(0) && d < std::numeric_limits<Scalar>::infinity();
+  };
+  const auto generic = [&](std::size_t r, std::size_t c) {
+    Scalar window[9];
+    int k = 0;
+    const std::size_t r0 = r == 0 ? 0 : r - 1, r1 = std::min(r + 1, h - 1);
+    const std::size_t c0 = c == 0 ? 0 : c - 1, c1 = std::min(c + 1, w - 1);
+    for (std::size_t rr = r0; rr <= r1; ++rr)
+      for (std::size_t cc = c0; cc <= c1; ++cc)
+        if (valid(in[rr * w + cc])) window[k++] = in[rr * w + cc];
+    for (int i = 1; i < k; ++i) {  // insertion sort of at most nine values
+      const Scalar v = window[i];
+      int j = i - 1;
+      while (j >= 0 && window[j] > v) {
+        window[j + 1] = window[j];
+        --j;
       }
-      // Insertion sort of fewer than nine values.
-      for (int i = 1; i < n; ++i) {
-        const Scalar v = window[i];
-        int j = i - 1;
-        while (j >= 0 && window[j] > v) {
-          window[j + 1] = window[j];
-          --j;
-        }
-        window[j + 1] = v;
-      }
-      image.depth[r * w + c] = window[(n - 1) / 2];
+      window[j + 1] = v;
     }
+    image.depth[r * w + c] = window[(k - 1) / 2];
+  };
+  for (std::size_t r = 0; r < h; ++r) {
+    const bool interior_row = r > 0 && r + 1 < h;
+    if (interior_row)
+      for (std::size_t c = 0; c < w; ++c) {
+        Scalar a = in[(r - 1) * w + c], b = in[r * w + c], d = in[(r + 1) * w + c];
+        full[c] = valid(a) && valid(b) && valid(d) ? Scalar(1) : Scalar(0);
+        if (a > b) std::swap(a, b);
+        if (b > d) std::swap(b, d);
+        if (a > b) std::swap(a, b);
+        lo[c] = a, mid[c] = b, hi[c] = d;
+      }
+    for (std::size_t c = 0; c < w; ++c) {
+      if (!valid(in[r * w + c])) continue;
+      if (interior_row && c > 0 && c + 1 < w && full[c - 1] + full[c] + full[c + 1] == Scalar(3)) {
+        // The median of nine from the sorted columns: med3(max of the lows, med3 of the
+        // middles, min of the highs).
+        const Scalar l = std::max(std::max(lo[c - 1], lo[c]), lo[c + 1]);
+        const Scalar u = std::min(std::min(hi[c - 1], hi[c]), hi[c + 1]);
+        const Scalar m = std::max(std::min(mid[c - 1], mid[c]),
+                                  std::min(std::max(mid[c - 1], mid[c]), mid[c + 1]));
+        image.depth[r * w + c] = std::max(std::min(l, m), std::min(std::max(l, m), u));
+      } else {
+        generic(r, c);
+      }
+    }
+  }
 }
 
 /// The same, with its own scratch buffer (allocates).

@@ -1,0 +1,150 @@
+#pragma once
+// Wheel speed control of paper 003 §2.1: a feed-forward term through the inverse of a measured
+// speed -> PWM lookup table T plus a constant load offset ("the no-load measurement and the one on
+// carpet differ only by a constant offset") moves the motor signal near the working point, and a
+// PI term corrects the remaining small disturbances (battery state, load); no D term. The motors
+// receive band-limited signals: the output is clamped to the PWM band and its change per cycle is
+// limited.
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "rangenav/core/error.hpp"
+
+namespace rangenav {
+
+/// The measured no-load characteristic T: wheel speed as a function of PWM (paper 003 Fig. 2,
+/// right), for non-negative PWM; negative PWM mirrors it.
+class SpeedPwmTable {
+ public:
+  /// `pwm` strictly increasing, `speed` non-decreasing, same size >= 2, all finite. Throws
+  /// invalid_argument otherwise.
+  SpeedPwmTable(std::vector<double> pwm, std::vector<double> speed)
+      : pwm_(std::move(pwm)), speed_(std::move(speed)) {
+    constexpr std::string_view where = "SpeedPwmTable";
+    if (pwm_.size() < 2)
+      detail::throw_invalid_argument(where, "pwm.size()", pwm_.size(), "must be >= 2");
+    if (speed_.size() != pwm_.size())
+      detail::throw_invalid_argument(where, "speed.size()", speed_.size(),
+                                     "must equal pwm.size() = " + std::to_string(pwm_.size()));
+    for (std::size_t i = 0; i < pwm_.size(); ++i) {
+      detail::require_finite(where, "pwm[" + std::to_string(i) + "]", pwm_[i]);
+      detail::require_finite(where, "speed[" + std::to_string(i) + "]", speed_[i]);
+      if (i > 0 && !(pwm_[i] > pwm_[i - 1]))
+        detail::throw_invalid_argument(where, "pwm[" + std::to_string(i) + "]", pwm_[i],
+                                       "must exceed the previous entry");
+      if (i > 0 && speed_[i] < speed_[i - 1])
+        detail::throw_invalid_argument(where, "speed[" + std::to_string(i) + "]", speed_[i],
+                                       "must not fall below the previous entry");
+    }
+  }
+
+  /// T(pwm): linear interpolation, clamped to the table's ends; odd in pwm.
+  [[nodiscard]] double speed(double pwm) const {
+    const double a = std::abs(pwm);
+    return std::copysign(interpolate(pwm_, speed_, a), pwm);
+  }
+
+  /// T^-1(speed): the smallest PWM that reaches `speed` (the lowest point of a flat stretch),
+  /// clamped to the table's ends; odd in speed.
+  [[nodiscard]] double pwm(double speed) const {
+    const double a = std::abs(speed);
+    if (a <= speed_.front()) return std::copysign(pwm_.front(), speed);
+    if (a >= speed_.back()) return std::copysign(pwm_.back(), speed);
+    const auto it = std::lower_bound(speed_.begin(), speed_.end(), a);  // first speed >= a
+    const auto i = static_cast<std::size_t>(it - speed_.begin());
+    const double t = (a - speed_[i - 1]) / (speed_[i] - speed_[i - 1]);
+    return std::copysign(pwm_[i - 1] + t * (pwm_[i] - pwm_[i - 1]), speed);
+  }
+
+  [[nodiscard]] double max_speed() const { return speed_.back(); }
+  [[nodiscard]] double max_pwm() const { return pwm_.back(); }
+
+ private:
+  static double interpolate(const std::vector<double>& x, const std::vector<double>& y, double a) {
+    if (a <= x.front()) return y.front();
+    if (a >= x.back()) return y.back();
+    const auto it = std::upper_bound(x.begin(), x.end(), a);
+    const auto i = static_cast<std::size_t>(it - x.begin());
+    const double t = (a - x[i - 1]) / (x[i] - x[i - 1]);
+    return y[i - 1] + t * (y[i] - y[i - 1]);
+  }
+
+  std::vector<double> pwm_;
+  std::vector<double> speed_;
+};
+
+struct MotorControllerParams {
+  double dt = 0.01;           ///< control period (s); Kurt3D's loop runs at 100 Hz
+  double feed_forward = 1.0;  ///< F_v, 1 "according to the design of the lookup table"
+  double load_offset = 0.0;   ///< speed lost to the load, e.g. carpet vs no-load (m/s)
+  double kp = 100.0;          ///< proportional gain (PWM per m/s)
+  double ki = 200.0;          ///< integral gain (PWM per m)
+  double pwm_limit = 1023.0;  ///< output band: |pwm| <= pwm_limit (10-bit PWM on Kurt3D)
+  double max_pwm_step = std::numeric_limits<double>::infinity();  ///< |change| per cycle
+
+  void validate(std::string_view where) const {
+    detail::require_positive(where, "params.dt", dt);
+    detail::require_positive(where, "params.feed_forward", feed_forward);
+    detail::require_non_negative(where, "params.load_offset", load_offset);
+    detail::require_non_negative(where, "params.kp", kp);
+    detail::require_non_negative(where, "params.ki", ki);
+    detail::require_positive(where, "params.pwm_limit", pwm_limit);
+    if (!(max_pwm_step > 0.0))
+      detail::throw_invalid_argument(where, "params.max_pwm_step", max_pwm_step, "must be > 0");
+  }
+};
+
+/// Feed-forward + lookup table + PI controller of one wheel (paper 003 Fig. 1, right).
+class MotorController {
+ public:
+  explicit MotorController(SpeedPwmTable table, const MotorControllerParams& params = {})
+      : table_(std::move(table)), params_(params) {
+    params_.validate("MotorController");
+  }
+
+  [[nodiscard]] const MotorControllerParams& params() const { return params_; }
+  [[nodiscard]] const SpeedPwmTable& table() const { return table_; }
+
+  /// The open-loop part: T^-1(F_v v + offset), signed; 0 for v = 0.
+  [[nodiscard]] double feed_forward(double v_set) const {
+    if (v_set == 0.0) return 0.0;
+    return table_.pwm(
+        std::copysign(params_.feed_forward * std::abs(v_set) + params_.load_offset, v_set));
+  }
+
+  /// One control cycle: the PWM for set speed `v_set` given the measured speed `v_measured`.
+  /// Non-finite input yields the previous output (never throws: it runs in the control loop).
+  [[nodiscard]] double step(double v_set, double v_measured) {
+    if (!std::isfinite(v_set) || !std::isfinite(v_measured)) return output_;
+    const double error = v_set - v_measured;
+    const double ff = feed_forward(v_set);
+    const double integral = integral_ + error * params_.dt;
+    double u = ff + params_.kp * error + params_.ki * integral;
+    const double band = std::clamp(u, -params_.pwm_limit, params_.pwm_limit);
+    // Conditional integration: the integrator only runs while the output is not saturated.
+    if (band == u) integral_ = integral;
+    u = std::clamp(band, output_ - params_.max_pwm_step, output_ + params_.max_pwm_step);
+    output_ = u;
+    return u;
+  }
+
+  void reset() {
+    integral_ = 0.0;
+    output_ = 0.0;
+  }
+  [[nodiscard]] double output() const { return output_; }
+
+ private:
+  SpeedPwmTable table_;
+  MotorControllerParams params_;
+  double integral_{0.0};
+  double output_{0.0};
+};
+
+}  // namespace rangenav

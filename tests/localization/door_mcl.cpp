@@ -1,0 +1,148 @@
+#include "rangenav/localization/door_mcl.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "rangenav/localization/mcl.hpp"
+#include "rangenav/sim/robot.hpp"
+#include "rangenav/sim/sensors.hpp"
+#include "rangenav/sim/worlds.hpp"
+
+using namespace rangenav;
+
+namespace {
+
+constexpr double half_pi = std::numbers::pi / 2;
+
+/// The corridor's doors as door models with the observed range [0, 90 deg]: south doors open
+/// clockwise (reference: fully open, -90 deg), north doors counter-clockwise (reference: closed).
+std::vector<DoorModel> corridor_doors(const sim::World& world) {
+  std::vector<DoorModel> doors;
+  for (const auto& d : world.doors()) {
+    DoorModel m;
+    m.hinge = d.hinge;
+    m.leaf_length = d.length;
+    m.opening_max = half_pi;
+    m.reference_angle = d.hinge.y() < 1 ? -half_pi : 0.0;
+    doors.push_back(m);
+  }
+  return doors;
+}
+
+/// The static map: the corridor mapped with its doors closed, door cells removed.
+OccupancyGrid static_map(const std::vector<DoorModel>& doors) {
+  const sim::Scene closed = sim::office_corridor();
+  OccupancyGrid grid = OccupancyGrid::covering({0, -4}, {20, 6}, 0.5);
+  const sim::LaserScanner2D laser;
+  std::mt19937_64 rng(11);
+  for (int pass = 0; pass < 2; ++pass)
+    for (int k = 0; k <= 94; ++k) {
+      const Pose2d pose{pass == 0 ? 0.6 + 0.2 * k : 19.4 - 0.2 * k, 1.0,
+                        pass == 0 ? 0.0 : std::numbers::pi};
+      grid.integrate(pose, laser.scan(closed.world, pose, rng));
+    }
+  remove_doors(grid, doors);
+  return grid;
+}
+
+struct Comparison {
+  double mcl_mean{0}, door_mean{0}, door_max{0};
+  std::vector<double> door_angles;
+};
+
+/// Standard MCL and door-aware MCL on the same drive along the corridor (paper 001 §V.B).
+Comparison compare(double opening, std::uint64_t seed) {
+  const sim::Scene scene = sim::office_corridor(std::vector<double>(8, opening));
+  const auto doors = corridor_doors(scene.world);
+  const OccupancyGrid grid = static_map(doors);
+  sim::LaserScannerParams lp;
+  lp.geometry = ScanGeometry<double>::from_fov(std::numbers::pi, deg_to_rad(1.0), 0.05, 30.0);
+  const sim::LaserScanner2D laser(lp);
+  sim::DifferentialDriveParams rp;
+  rp.odometry.v_scale = 0.03;
+  rp.odometry.omega_bias = 0.02;
+  rp.odometry.v_sigma = 0.05;
+  rp.odometry.omega_sigma = 0.05;
+  sim::DifferentialDriveRobot robot(rp, {1.0, 1.0, 0.0});
+  const OdometryMotionParams motion{0.1, 0.05, 0.1, 0.05};
+  MclParams mp;
+  mp.min_particles = mp.max_particles = 500;
+  mp.adapt_particle_count = false;
+  MonteCarloLocalization<> mcl(OdometryMotionModel(motion), LikelihoodFieldModel(grid), mp);
+  DoorAwareMclParams dp;
+  dp.motion = motion;
+  DoorAwareMcl door_mcl(grid, doors, dp);
+  std::mt19937_64 sim_rng(seed), rng_a(seed + 1), rng_b(seed + 1);
+  mcl.initialize_gaussian(robot.pose(), {0.05, 0.05, 0.02}, 500, rng_a);
+  door_mcl.initialize_gaussian(robot.pose(), {0.05, 0.05, 0.02}, 500, rng_b);
+  LikelihoodFieldModel::Observation z;
+  DoorAwareObservation dz;
+  Pose2d last = robot.odometry();
+  Comparison c;
+  int n = 0;
+  while (robot.pose().x < 18.5) {
+    for (int k = 0; k < 10; ++k) {
+      const Pose2d& p = robot.pose();
+      robot.step(scene.world, 0.5, -1.5 * (p.y - 1.0) - 2.0 * p.theta, sim_rng);
+    }
+    const auto scan = laser.scan(scene.world, robot.pose(), sim_rng);
+    mcl.sensor_model().prepare(scan, Pose2d{}, z);
+    door_mcl.prepare(scan, Pose2d{}, dz);
+    const OdometryReading u{last, robot.odometry()};
+    mcl.update(u, z, rng_a);
+    door_mcl.update(u, dz, rng_b);
+    last = robot.odometry();
+    const Point2d truth = robot.pose().position();
+    c.mcl_mean += (mcl.estimate().position() - truth).norm();
+    const double e = (door_mcl.estimate().position() - truth).norm();
+    c.door_mean += e;
+    c.door_max = std::max(c.door_max, e);
+    ++n;
+  }
+  c.mcl_mean /= n;
+  c.door_mean /= n;
+  for (std::size_t k = 0; k < doors.size(); ++k)
+    c.door_angles.push_back(door_mcl.door_angle(k));
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("door mcl: closed doors are tracked and localize along the corridor",
+          "[localization][doors][sim]") {
+  const Comparison c = compare(0.0, 1);
+  WARN("closed doors: standard MCL mean " << c.mcl_mean << " m, door-aware mean " << c.door_mean
+                                          << " m (max " << c.door_max << " m)");
+  CHECK(c.door_mean < 0.05);
+  CHECK(c.door_max < 0.2);
+  CHECK(c.door_mean < c.mcl_mean);
+  // All doors estimated closed: south doors at 90 deg from their (open) reference, north at 0.
+  for (std::size_t k = 0; k < 8; ++k)
+    CHECK(c.door_angles[k] == Approx(k < 4 ? half_pi : 0.0).margin(deg_to_rad(10.0)));
+}
+
+TEST_CASE("door mcl: partially open doors", "[localization][doors][sim]") {
+  const Comparison c = compare(deg_to_rad(30.0), 2);
+  WARN("doors open 30 deg: standard MCL mean " << c.mcl_mean << " m, door-aware mean "
+                                               << c.door_mean << " m (max " << c.door_max << " m)");
+  CHECK(c.door_mean < 0.05);
+  CHECK(c.door_max < 0.2);
+}
+
+TEST_CASE("door mcl: bad arguments", "[localization][doors]") {
+  const OccupancyGrid grid({0, 0}, 10, 10);
+  const std::vector<DoorModel> too_many(17);
+  CHECK_THROWS_WITH(DoorAwareMcl(grid, too_many),
+                    "rangenav: DoorAwareMcl: argument 'doors.size()' = 17 must be <= 16");
+  DoorAwareMclParams p;
+  p.sigma_d = -1;
+  CHECK_THROWS_WITH(DoorAwareMcl(grid, {}, p),
+                    "rangenav: DoorAwareMcl: argument 'sigma_d' = -1 must be finite and >= 0");
+  DoorAwareMcl mcl(grid, {});
+  std::mt19937_64 rng(1);
+  CHECK_THROWS_WITH(mcl.update(OdometryReading{}, DoorAwareObservation{}, rng),
+                    "rangenav: DoorAwareMcl::update: not initialised");
+}
