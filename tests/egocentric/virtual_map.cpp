@@ -286,3 +286,45 @@ TEST_CASE("float maps behave like double maps", "[egocentric][virtual_map]") {
   CHECK(map.valid_points()[0].isApprox(expected, 1e-5f));
   CHECK(map.to_laser_scan().valid_count() == 1);
 }
+
+namespace {
+// A user policy: the newest reading always wins, at any height (a "last seen" map).
+struct NewestPolicy {
+  template <class S>
+  bool admits(S range, S, S max_range) const {
+    return range < max_range;
+  }
+  template <class S>
+  bool prefers(S, S) const {
+    return true;
+  }
+  template <class S>
+  S dummy_range(S max_range) const {
+    return max_range;
+  }
+};
+struct NotAPolicy {
+  bool admits(double) const { return true; }
+};
+}  // namespace
+
+TEST_CASE("users plug in their own policy; the concept rejects incomplete ones",
+          "[egocentric][virtual_map]") {
+  static_assert(VirtualMapPolicy<NewestPolicy, double>);
+  static_assert(!VirtualMapPolicy<NotAPolicy, double>);
+  static_assert(!VirtualMapPolicy<int, double>);
+  VirtualMap<NewestPolicy, double> map;
+  map.insert(one(2.0, 0.0));
+  map.insert(one(5.0, 0.0, 3.0));  // farther and higher: still replaces
+  REQUIRE(map.valid_count() == 1);
+  CHECK(map.valid_points()[0].x() == 5.0);
+  // Any representation of the motion's rotation works: 2 pi + 0.1 is a turn by 0.1.
+  ObstacleMap<double> a, b;
+  a.insert(one(2.0, 1.0));
+  b.insert(one(2.0, 1.0));
+  a.transform(Pose2d{0.1, 0.0, 2 * pi + 0.1});
+  b.transform(Pose2d{0.1, 0.0, 0.1});
+  REQUIRE(a.valid_count() == 1);
+  CHECK(a.valid_points()[0].isApprox(b.valid_points()[0]));
+  CHECK(a.valid_indices() == b.valid_indices());
+}

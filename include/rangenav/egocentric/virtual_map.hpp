@@ -341,7 +341,7 @@ class VirtualMap {
   VirtualMapUpdateStats transform_bins(const Pose2<Scalar>& motion) {
     VirtualMapUpdateStats stats;
     if (motion.x == Scalar(0) && motion.y == Scalar(0) && motion.theta == Scalar(0)) return stats;
-    const Scalar dtheta = -motion.theta;
+    const Scalar dtheta = normalize_angle(-motion.theta);  // once per update
     const Scalar c = std::cos(dtheta), s = std::sin(dtheta);
     const Scalar tx = -(c * motion.x - s * motion.y), ty = -(s * motion.x + c * motion.y);
     const Scalar max_range = params_.max_range;

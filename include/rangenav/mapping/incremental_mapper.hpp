@@ -11,8 +11,10 @@
 // 3D clouds may be voxel-downsampled before matching (`voxel_size`, paper 004 §3.2).
 
 #include <algorithm>
+#include <cmath>
 #include <concepts>
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <string_view>
 #include <vector>
@@ -40,6 +42,10 @@ struct IncrementalMapperParams {
   /// Keep a registration the ICP reported degenerate (e.g. in a corridor): its constrained
   /// directions still correct the odometry. When false the odometry guess is kept instead.
   bool accept_degenerate = true;
+  /// A registration that moves the pose farther than this from the odometry guess is rejected
+  /// (a gross mismatch: between two scans odometry is off by centimetres, not metres). m, rad.
+  Scalar max_correction_distance = std::numeric_limits<Scalar>::infinity();
+  Scalar max_correction_angle = std::numeric_limits<Scalar>::infinity();
   /// Edge of the voxel filter applied to each scan before matching; 0 = no filter.
   Scalar voxel_size = Scalar(0);
 
@@ -138,7 +144,10 @@ class IncrementalMapper {
                         r.reason == IcpTermination::max_iterations ||
                         (r.reason == IcpTermination::degenerate && params.accept_degenerate &&
                          r.smallest_eigenvalue.has_value());
-    update.registration_accepted = usable && r.fitness >= params.min_fitness;
+    const transform_type correction = guess.inverse(Eigen::Isometry) * r.transform;
+    const bool plausible = correction.translation().norm() <= params.max_correction_distance &&
+                           std::abs(rotation_angle(correction)) <= params.max_correction_angle;
+    update.registration_accepted = usable && plausible && r.fitness >= params.min_fitness;
     if (update.registration_accepted) update.pose = r.transform;
     pose_ = update.pose;
     if (update.registration_accepted && key_frames_.update(pose_)) {
