@@ -19,6 +19,8 @@
 #include "rangenav/io/carmen.hpp"
 #include "rangenav/io/slam_relations.hpp"
 #include "rangenav/registration/hayai.hpp"
+#include "rangenav/registration/icp.hpp"
+#include "rangenav/search/kd_tree.hpp"
 #include "rangenav/sim/world.hpp"
 
 using namespace rangenav;
@@ -129,7 +131,9 @@ const CsailData* csail() {
 }
 
 // mode 0: HAYAI alone (constant-velocity prediction), 1: HAYAI fused with odometry by the EKF,
-// 2: odometry alone (the baseline).
+// 2: odometry alone (the baseline), 3: the ICP tracker for comparison: scan-to-scan PaperIcp
+// (decaying distance + unique pairs, paper 002 §6.3) from the odometry increment, which it keeps
+// when the alignment does not converge.
 void BM_hayai_csail(benchmark::State& state) {
   const CsailData* data = csail();
   if (data == nullptr) {
@@ -142,6 +146,8 @@ void BM_hayai_csail(benchmark::State& state) {
   std::size_t ok = 0;
   for (auto _ : state) {
     HayaiTracker<double> tracker;
+    PaperIcp<2, double> icp;
+    Pose2d icp_pose{};
     std::vector<double> stamps;
     std::vector<Pose2d> poses;
     Pose2d dead_reckoning{};
@@ -155,6 +161,19 @@ void BM_hayai_csail(benchmark::State& state) {
       if (mode == 2) {
         if (odometry) dead_reckoning = compose(dead_reckoning, *odometry);
         poses.push_back(dead_reckoning);
+      } else if (mode == 3) {
+        const std::clock_t start = std::clock();
+        if (k > 0) {
+          const Pose2d guess = odometry.value_or(Pose2d{});
+          const KdTree<2, double> model(data->lasers[k - 1].scan);
+          const auto r = icp.align(model, laser.scan, guess.to_isometry());
+          const bool good =
+              r.reason == IcpTermination::converged || r.reason == IcpTermination::max_iterations;
+          ok += good ? 1 : 0;
+          icp_pose = compose(icp_pose, good ? Pose2d::from_isometry(r.transform) : guess);
+        }
+        seconds += static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC;
+        poses.push_back(icp_pose);
       } else {
         const std::clock_t start = std::clock();  // CPU time: robust on a busy machine
         const auto r = (mode == 1 && odometry) ? tracker.track(laser.scan, *odometry)
@@ -180,10 +199,11 @@ void BM_hayai_csail(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_hayai_csail)
-    ->ArgName("mode_hayai0_fused1_odometry2")
+    ->ArgName("mode_hayai0_fused1_odometry2_icp3")
     ->Arg(0)
     ->Arg(1)
     ->Arg(2)
+    ->Arg(3)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 

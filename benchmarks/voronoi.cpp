@@ -28,8 +28,10 @@ std::vector<Point2d> random_map(std::size_t n) {
   const double side = std::sqrt(static_cast<double>(n) / 10.0);
   std::uniform_real_distribution<double> u(0.0, side);
   std::vector<Point2d> pts(n);
-  for (auto& p : pts)
-    p = Point2d(u(rng), u(rng));
+  for (auto& p : pts) {
+    const double x = u(rng);  // sequenced: the order of argument evaluation is unspecified
+    p = Point2d(x, u(rng));
+  }
   return pts;
 }
 

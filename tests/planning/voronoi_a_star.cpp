@@ -53,8 +53,10 @@ std::vector<Point2d> random_points(std::size_t n, double size, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(0.0, size);
   std::vector<Point2d> pts(n);
-  for (auto& p : pts)
-    p = Point2d(u(rng), u(rng));
+  for (auto& p : pts) {
+    const double x = u(rng);  // sequenced: the order of argument evaluation is unspecified
+    p = Point2d(x, u(rng));
+  }
   return pts;
 }
 

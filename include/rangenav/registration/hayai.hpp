@@ -15,21 +15,30 @@
 //   5. keep S as the new reference scan.
 //
 // What the paper leaves open, and what is chosen here (all in HayaiParams):
+//   - candidates: the beams where the softened gradient turns fastest (Ψ2 applied once more);
 //   - the significance of an extremum: a candidate must be a real corner, i.e. the beams on its
 //     left and on its right must each lie on a straight line (total least squares, RMS below
-//     max_line_rms) and the two lines must meet at min_corner_angle or more. This rejects the
-//     smooth minimum of a wall (its foot point moves with the robot: not a landmark), so a
-//     featureless corridor yields no features instead of a wrong pose. The corner is then placed
-//     at the lines' intersection, which is exact on noise-free polygonal scenes;
+//     max_line_rms) and the two lines must meet at min_corner_angle or more, by more than
+//     corner_significance standard deviations of their directions. This rejects the smooth
+//     minimum of a wall (its foot point moves with the robot: not a landmark) and the random
+//     turns of short noisy fits, so a featureless corridor yields no features instead of a wrong
+//     pose. The corner is then placed at the lines' intersection, which is exact on noise-free
+//     polygonal scenes;
 //   - jump edges: the near (occluding) end point of a range jump is a minimum of the sharpened
-//     signal and is a feature; the far (shadow) end point moves with the viewpoint and is used only
-//     when use_shadow_edges is set. Invalid beams split the signal and are never features;
+//     signal and is a feature, placed half a beam towards the jump; the far (shadow) end point
+//     moves with the viewpoint and is used only when use_shadow_edges is set. Invalid beams split
+//     the signal and are never features; a scan covering a full turn is read as a ring;
+//   - every feature carries a σ (line-fit noise for corners, beam spacing for jump edges) that
+//     weights its pair in E(R, t) of §3.2 and gives the pose covariance;
 //   - the weights ω1, ω2, ω3 of Eq. (4) and the gate on it (the paper gives no values);
 //   - "simplified until unique": the candidate pairs are taken greedily by increasing Eq. (4)
 //     distance (one partner per feature), then, for scans that do not cover a full turn, only the
 //     longest run of pairs whose order is the same in both scans is kept (the features' order
 //     cannot change fundamentally between consecutive scans); pairs whose residual after Eq. (5-6)
-//     exceeds max_pair_residual are dropped and the pose is solved again.
+//     exceeds max_pair_residual are dropped one by one and the pose is solved again;
+//   - the tracker (not in the paper): without odometry it predicts at constant velocity, retries
+//     turned hypotheses when that matches too few features, and coasts through scans it cannot
+//     register; with odometry it fuses the two increments in an EKF (HayaiOdometryNoise).
 //
 // Thread safety: the free functions are reentrant; a HayaiFeatureExtractor, HayaiMatcher or
 // HayaiTracker object must not be used by two threads at once (each keeps scratch buffers, so the
@@ -49,6 +58,7 @@
 #include <optional>
 #include <span>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "rangenav/core/angles.hpp"
