@@ -63,8 +63,7 @@ MclParams fixed_count(std::size_t n) {
 void BM_mcl_update(benchmark::State& state) {
   const Setup& s = setup();
   const auto n = static_cast<std::size_t>(state.range(0));
-  MonteCarloLocalization<> mcl(OdometryMotionModel(), LikelihoodFieldModel(s.grid),
-                               fixed_count(n));
+  MonteCarloLocalization<> mcl(OdometryMotionModel(), LikelihoodFieldModel(s.grid), fixed_count(n));
   std::mt19937_64 rng(7);
   mcl.initialize_gaussian(s.poses.front(), {0.2, 0.2, 0.05}, n, rng);
   LikelihoodFieldModel::Observation z;
@@ -79,8 +78,8 @@ void BM_mcl_update(benchmark::State& state) {
     ++k;
   }
   state.counters["beams"] = static_cast<double>(z.end_points.size());
-  state.counters["Hz"] = benchmark::Counter(static_cast<double>(state.iterations()),
-                                            benchmark::Counter::kIsRate);
+  state.counters["Hz"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_mcl_update)->Arg(1000)->Arg(10000)->Arg(50000)->Unit(benchmark::kMillisecond);
 
@@ -92,10 +91,12 @@ void BM_mcl_weight(benchmark::State& state) {
   std::mt19937_64 rng(7);
   std::normal_distribution<double> noise(0.0, 0.2);
   std::vector<Pose2d> particles(n);
-  for (auto& p : particles) p = {s.poses[10].x + noise(rng), s.poses[10].y + noise(rng), noise(rng)};
+  for (auto& p : particles)
+    p = {s.poses[10].x + noise(rng), s.poses[10].y + noise(rng), noise(rng)};
   for (auto _ : state) {
     double sum = 0;
-    for (const auto& p : particles) sum += field.log_likelihood(p, z);
+    for (const auto& p : particles)
+      sum += field.log_likelihood(p, z);
     benchmark::DoNotOptimize(sum);
   }
   state.counters["beams"] = static_cast<double>(z.end_points.size());

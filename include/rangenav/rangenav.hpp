@@ -29,6 +29,7 @@
 #include "rangenav/io/svg.hpp"
 #include "rangenav/io/trajectory.hpp"
 #include "rangenav/localization/door_mcl.hpp"
+#include "rangenav/localization/free_space_sampling.hpp"
 #include "rangenav/localization/likelihood_field.hpp"
 #include "rangenav/localization/mcl.hpp"
 #include "rangenav/localization/odometry_motion_model.hpp"

@@ -25,6 +25,7 @@
 #include "rangenav/core/angles.hpp"
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
+#include "rangenav/localization/free_space_sampling.hpp"
 #include "rangenav/localization/likelihood_field.hpp"
 #include "rangenav/localization/odometry_motion_model.hpp"
 #include "rangenav/localization/particle_filter.hpp"
@@ -106,25 +107,8 @@ class MonteCarloLocalization {
   template <class Engine>
   void initialize_uniform(const OccupancyGrid& grid, std::size_t count, Engine& rng,
                           double free_probability = 0.25) {
-    constexpr std::string_view where = "MonteCarloLocalization::initialize_uniform";
-    if (count == 0) detail::throw_invalid_argument(where, "count", count, "must be > 0");
-    const double l_free = log_odds(std::clamp(free_probability, 1e-6, 0.5));
-    std::vector<OccupancyGrid::Index> free;
-    for (int y = 0; y < grid.height(); ++y)
-      for (int x = 0; x < grid.width(); ++x)
-        if (grid.log_odds_at({x, y}) < l_free) free.emplace_back(x, y);
-    if (free.empty()) detail::throw_invalid(where, "the grid has no free cell");
-    std::uniform_int_distribution<std::size_t> pick(0, free.size() - 1);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    std::uniform_real_distribution<double> heading(-std::numbers::pi, std::numbers::pi);
-    states_.resize(count);
-    for (auto& x : states_) {
-      const Point2d corner =
-          grid.cell_center(free[pick(rng)]) - Point2d::Constant(grid.resolution() / 2);
-      x.x = corner.x() + unit(rng) * grid.resolution();
-      x.y = corner.y() + unit(rng) * grid.resolution();
-      x.theta = normalize_angle(heading(rng));
-    }
+    states_ = sample_free_space_poses(grid, count, rng, free_probability,
+                                      "MonteCarloLocalization::initialize_uniform");
     filter_.reset(states_);
   }
 
