@@ -3,6 +3,7 @@
 // everything in it when the object goes out of scope.
 
 #include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 #include <string_view>
@@ -28,6 +29,12 @@ class ScratchDir {
   [[nodiscard]] const std::filesystem::path& path() const { return path_; }
   [[nodiscard]] std::filesystem::path operator/(std::string_view name) const {
     return path_ / name;
+  }
+  /// Writes `content` to the file `name` in this directory and returns its path.
+  std::filesystem::path write(std::string_view name, const std::string& content) const {
+    const auto file = path_ / name;
+    std::ofstream(file, std::ios::binary) << content;
+    return file;
   }
 
  private:

@@ -13,6 +13,7 @@
 
 #include "rangenav/io/carmen.hpp"
 #include "rangenav/io/trajectory.hpp"
+#include "scratch_dir.hpp"
 #include "test_support.hpp"
 
 using namespace rangenav;
@@ -22,31 +23,9 @@ namespace {
 
 constexpr double pi = std::numbers::pi;
 
-/// A fresh directory under the system temp dir, removed with everything in it at scope exit.
-class TempDir {
- public:
-  TempDir() {
-    std::random_device random;
-    path_ = std::filesystem::temp_directory_path() /
-            ("rangenav_trajectory_" + std::to_string(random()) + std::to_string(random()));
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-
-  std::filesystem::path write(const std::string& name, const std::string& content) const {
-    const auto file = path_ / name;
-    std::ofstream(file, std::ios::binary) << content;
-    return file;
-  }
-  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
+/// A scratch directory for this file's tests (tests/io/scratch_dir.hpp).
+struct TempDir : rangenav::test::ScratchDir {
+  TempDir() : ScratchDir("trajectory") {}
 };
 
 std::string read_text(const std::filesystem::path& path) {
