@@ -1,10 +1,12 @@
 #pragma once
 // Helpers shared by the tests: where the real data lives, and the visible skip.
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <string>
+#include <vector>
 
 namespace rangenav::test {
 
@@ -21,6 +23,23 @@ inline std::filesystem::path data_file_or_skip(const std::string& relative) {
   if (std::filesystem::exists(path)) return path;
   std::cout << "[rangenav-skip] data file not found: " << path.string() << '\n';
   return {};
+}
+
+/// Sample mean of v (v not empty).
+inline double mean(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v)
+    sum += x;
+  return sum / static_cast<double>(v.size());
+}
+
+/// Sample standard deviation of v (with the n - 1 denominator; v has at least two values).
+inline double stddev(const std::vector<double>& v) {
+  const double m = mean(v);
+  double sum = 0;
+  for (double x : v)
+    sum += (x - m) * (x - m);
+  return std::sqrt(sum / static_cast<double>(v.size() - 1));
 }
 
 }  // namespace rangenav::test

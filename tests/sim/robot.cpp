@@ -7,25 +7,16 @@
 #include "rangenav/sim/robot.hpp"
 #include "rangenav/sim/worlds.hpp"
 
+#include "test_support.hpp"
+
 using namespace rangenav;
 using namespace rangenav::sim;
 
 namespace {
 const double pi = std::numbers::pi;
 
-double mean(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v)
-    s += x;
-  return s / static_cast<double>(v.size());
-}
-double stddev(const std::vector<double>& v) {
-  const double m = mean(v);
-  double s = 0;
-  for (double x : v)
-    s += (x - m) * (x - m);
-  return std::sqrt(s / static_cast<double>(v.size() - 1));
-}
+using rangenav::test::mean;
+using rangenav::test::stddev;
 }  // namespace
 
 TEST_CASE("differential drive kinematics: lines and arcs", "[sim][robot]") {

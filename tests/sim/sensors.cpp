@@ -8,6 +8,8 @@
 #include "rangenav/sim/sensors.hpp"
 #include "rangenav/sim/worlds.hpp"
 
+#include "test_support.hpp"
+
 using namespace rangenav;
 using namespace rangenav::sim;
 
@@ -22,19 +24,8 @@ World square_room(double half = 2.0) {
   return w;
 }
 
-double mean(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v)
-    s += x;
-  return s / static_cast<double>(v.size());
-}
-double stddev(const std::vector<double>& v) {
-  const double m = mean(v);
-  double s = 0;
-  for (double x : v)
-    s += (x - m) * (x - m);
-  return std::sqrt(s / static_cast<double>(v.size() - 1));
-}
+using rangenav::test::mean;
+using rangenav::test::stddev;
 }  // namespace
 
 TEST_CASE("2D laser: S300 layout and ranges computed by hand", "[sim][sensors]") {
