@@ -268,25 +268,36 @@ TEST_CASE("re-observing a surface refreshes its bin: points still seen never age
       oldest = std::max(oldest, b.age);
     }
   }
-  CHECK(oldest <= 2);
-  // The refresh tolerance does not let a farther object hide a nearer one, in either map type.
+  CHECK(oldest <= 3);
+  // A re-observation restarts the age but keeps the nearer point: the obstacle never creeps
+  // away from the robot, and a farther surface or a nearer obstacle are told apart.
   ObstacleMap<double> obstacle;
   CHECK(obstacle.insert(one(3.0, 0.0)) == 1);
-  CHECK(obstacle.insert(one(3.02, 0.0)) == 1);  // the same surface, within 3 cm: refreshed
-  CHECK(obstacle.valid_points()[0].x() == 3.02);
-  CHECK(obstacle.insert(one(3.06, 0.0)) == 0);  // 4 cm behind it: another surface
-  CHECK(obstacle.insert(one(2.5, 0.0)) == 1);   // nearer: wins
+  obstacle.transform(Pose2d{0.001, 0.0, 0.0});
+  REQUIRE(obstacle.bin(obstacle.valid_indices()[0]).age == 1);
+  CHECK(obstacle.insert(one(3.02, 0.0)) == 0);  // the same surface, 2 cm farther: seen again
+  CHECK(obstacle.bin(obstacle.valid_indices()[0]).age == 0);
+  CHECK(obstacle.valid_points()[0].x() == Approx(2.999));
+  obstacle.transform(Pose2d{0.001, 0.0, 0.0});
+  CHECK(obstacle.insert(one(3.05, 0.0)) == 0);  // 5 cm behind it: another surface
+  CHECK(obstacle.bin(obstacle.valid_indices()[0]).age == 1);
+  CHECK(obstacle.insert(one(2.5, 0.0)) == 1);  // nearer: replaces
   CHECK(obstacle.valid_points()[0].x() == 2.5);
   StructureMap<double> structure;
   CHECK(structure.insert(one(5.0, 0.0)) == 1);
-  CHECK(structure.insert(one(4.98, 0.0)) == 1);  // the same wall: refreshed
-  CHECK(structure.insert(one(4.9, 0.0)) == 0);   // 8 cm nearer: an object in front of it
-  CHECK(structure.valid_points()[0].x() == 4.98);
-  // With a zero tolerance the policies are the paper's strict "<=" and ">=".
+  structure.transform(Pose2d{-0.001, 0.0, 0.0});
+  CHECK(structure.insert(one(4.98, 0.0)) == 0);  // the same wall: seen again
+  CHECK(structure.bin(structure.valid_indices()[0]).age == 0);
+  structure.transform(Pose2d{-0.001, 0.0, 0.0});
+  CHECK(structure.insert(one(4.9, 0.0)) == 0);  // 10 cm nearer: an object in front of it
+  CHECK(structure.bin(structure.valid_indices()[0]).age == 1);
+  CHECK(structure.valid_points()[0].x() == Approx(5.002));
+  // With a zero tolerance nothing is refreshed.
   ObstacleMap<double> strict(VirtualMapParams<double>{}, ObstacleMapPolicy{0.0, 1.0, 0.0});
   strict.insert(one(3.0, 0.0));
-  CHECK(strict.insert(one(3.001, 0.0)) == 0);
-  CHECK(strict.insert(one(3.0, 0.0)) == 1);
+  strict.transform(Pose2d{0.001, 0.0, 0.0});
+  strict.insert(one(3.001, 0.0));
+  CHECK(strict.bin(strict.valid_indices()[0]).age == 1);
 }
 
 TEST_CASE("restricted aperture drops points that leave it", "[egocentric][virtual_map]") {
