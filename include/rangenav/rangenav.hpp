@@ -19,6 +19,7 @@
 #include "rangenav/egocentric/pitching_stream.hpp"
 #include "rangenav/egocentric/tof_obstacles.hpp"
 #include "rangenav/egocentric/virtual_map.hpp"
+#include "rangenav/geometry/planar_polygon.hpp"
 #include "rangenav/geometry/voxel_grid.hpp"
 #include "rangenav/io/carmen.hpp"
 #include "rangenav/io/line_reader.hpp"
