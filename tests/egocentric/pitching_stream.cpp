@@ -57,6 +57,21 @@ TEST_CASE("area of interest: full aperture at standstill, virtual corridor when 
                     "rangenav: virtual_corridor_aoi: argument 'd_min' = 0 must be finite and > 0");
 }
 
+TEST_CASE("the pitching scanner's blind zone", "[egocentric][pitching]") {
+  const Point3d offset(0.15, 0.0, 0.55);
+  // Pitched down 40 deg, the lowest beam meets the floor 0.55 / tan(40 deg) ahead of the axis.
+  const double pitch = 40.0 * std::numbers::pi / 180;
+  CHECK(pitching_blind_range(offset, pitch) == Approx(0.15 + 0.55 / std::tan(pitch)));
+  CHECK(pitching_blind_range(offset, pitch, 0.1) == Approx(0.15 + 0.45 / std::tan(pitch)));
+  CHECK(pitching_blind_range(offset, std::numbers::pi / 4) == Approx(0.70));
+  CHECK_THROWS_WITH(pitching_blind_range(offset, 0.0),
+                    "rangenav: pitching_blind_range: argument 'pitch_max' = 0 must be in (0, pi / "
+                    "2)");
+  CHECK_THROWS_WITH(pitching_blind_range(offset, pitch, 0.6),
+                    "rangenav: pitching_blind_range: argument 'height' = 0.59999999999999998 must "
+                    "be below the sensor height 0.55000000000000004");
+}
+
 TEST_CASE("cluster centroids replace runs of close points (§6.1)", "[egocentric][pitching]") {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const std::vector<Point2d> pts = {{0, 0}, {0.01, 0}, {0.02, 0}, {1, 0}, {nan, 0}, {1.005, 0}};

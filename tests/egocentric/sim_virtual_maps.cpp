@@ -266,8 +266,8 @@ TEST_CASE("§6.1 reduction: lines on the true walls, planes of the walls and the
         }
         // A wall: horizontal normal, in the world rotated by the base pose's heading.
         INFO("plane n " << plane.normal.transpose() << " d " << plane.distance << " lines "
-                        << plane.line_count << " rows " << plane.first_row << "-"
-                        << plane.last_row << " rms " << plane.rms);
+                        << plane.line_count << " rows " << plane.first_row << "-" << plane.last_row
+                        << " rms " << plane.rms);
         CHECK(std::abs(plane.normal.z()) < std::sin(deg_to_rad(3.0)));
         const Point2d n = Eigen::Rotation2Dd(base.theta) *
                           Point2d(plane.normal.x(), plane.normal.y()).normalized();
@@ -280,8 +280,8 @@ TEST_CASE("§6.1 reduction: lines on the true walls, planes of the walls and the
             wall_plane[w] = true;
           }
         INFO("plane n " << plane.normal.transpose() << " d " << plane.distance << " lines "
-                        << plane.line_count << " rows " << plane.first_row << "-"
-                        << plane.last_row << " rms " << plane.rms);
+                        << plane.line_count << " rows " << plane.first_row << "-" << plane.last_row
+                        << " rms " << plane.rms);
         CHECK(matched);
       }
       CHECK(floor_plane);
@@ -295,4 +295,47 @@ TEST_CASE("§6.1 reduction: lines on the true walls, planes of the walls and the
     }
     pose = sim::DifferentialDriveRobot::integrate(pose, 0.2, 0.0, scanner.params().scan_period);
   }
+}
+
+TEST_CASE("an obstacle in the pitching scanner's blind zone is not forgotten while turning",
+          "[egocentric][sim]") {
+  // The robot drives toward a can (10 cm high) until it is 0.5 m away, as the virtual roadway
+  // stops it there, then turns on the spot left and right for 6 s. The can is nearer than the
+  // scanner's lowest beam reaches: it is never measured again, and ageing alone (§4.4.2) would
+  // remove it (paper 002 assumes a static obstacle is "immediately measured again").
+  sim::World world;
+  world.add_cylinder({{2.0, 0.1}, 0.05, 0.0, 0.10});
+  world.build_index();
+  const sim::PitchingScanner scanner(scanner_params());
+  const auto run = [&](double blind_range) {
+    std::mt19937 rng(9);
+    PitchingObstacleExtractor<double> extractor(scanner.params().sensor_offset);
+    VirtualMapParams<double> mp;
+    mp.max_age = 225;  // 3 s at 75 Hz
+    mp.blind_range = blind_range;
+    ObstacleMap<double> map(mp);
+    const double dt = scanner.params().scan_period;
+    Pose2d pose{0, 0, 0}, previous = pose;
+    for (std::size_t k = 0; k < 1000; ++k) {
+      const double t = static_cast<double>(k) * dt;
+      const auto ps = scanner.scan(world, pose, scanner.scan_time(k), rng);
+      map.update(relative(previous, pose), extractor.push(ps, pose));
+      previous = pose;
+      const bool driving = 2.0 - pose.x > 0.5;
+      const double omega = driving ? 0.0 : (std::fmod(t, 1.0) < 0.5 ? 0.6 : -0.6);
+      pose = sim::DifferentialDriveRobot::integrate(pose, driving ? 0.3 : 0.0, omega, dt);
+    }
+    // Map points on the can (robot frame of the last pose).
+    const Point2d can = relative(pose, Pose2d{2.0, 0.1, 0.0}).position();
+    REQUIRE(can.norm() < 0.6);
+    std::size_t on_can = 0;
+    for (const auto& p : map.valid_points())
+      on_can += (p - can).norm() < 0.1 ? 1 : 0;
+    return on_can;
+  };
+  const double blind =
+      pitching_blind_range(scanner.params().sensor_offset, scanner.params().pitch_max, 0.10);
+  CHECK(blind > 0.6);     // the can at 0.5 m is inside it
+  CHECK(run(blind) > 0);  // kept
+  CHECK(run(0.0) == 0);   // the paper's rule forgets it
 }

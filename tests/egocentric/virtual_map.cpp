@@ -300,6 +300,32 @@ TEST_CASE("re-observing a surface refreshes its bin: points still seen never age
   CHECK(strict.bin(strict.valid_indices()[0]).age == 1);
 }
 
+TEST_CASE("age-out spares the sensor's blind zone", "[egocentric][virtual_map]") {
+  VirtualMapParams<double> params;
+  params.max_age = 5;
+  params.blind_range = 0.8;
+  ObstacleMap<double> map(params);
+  map.insert(one(0.5, 0.3));   // in the blind zone: never re-measured, kept
+  map.insert(one(2.0, -1.0));  // seen by the sensor: aged out as in the paper
+  // Turning on the spot: many transformations, the near point stays where it is.
+  for (int i = 0; i < 40; ++i)
+    map.transform(Pose2d{0.0, 0.0, i % 2 == 0 ? 0.01 : -0.01});
+  REQUIRE(map.valid_count() == 1);
+  const auto& kept = map.bin(map.valid_indices()[0]);
+  CHECK(kept.x == Approx(0.5));
+  CHECK(kept.y == Approx(0.3));
+  CHECK(kept.age == 5);  // saturates at max_age
+  // Backing away takes it out of the blind zone: it goes at the next transformation.
+  map.transform(Pose2d{-0.3, 0.0, 0.0});
+  CHECK(map.valid_count() == 1);  // range 0.86 now, but the range checked is the stored 0.58
+  map.transform(Pose2d{-0.01, 0.0, 0.0});
+  CHECK(map.valid_count() == 0);
+  params.blind_range = -0.1;
+  CHECK_THROWS_WITH(ObstacleMap<double>(params),
+                    "rangenav: VirtualMap: argument 'blind_range' = -0.10000000000000001 must be "
+                    "finite and >= 0");
+}
+
 TEST_CASE("restricted aperture drops points that leave it", "[egocentric][virtual_map]") {
   ObstacleMap<double> map(VirtualMapParams<double>{deg_to_rad(60.0), deg_to_rad(1.0)});
   CHECK(map.insert(one(2.0, 0.5)) == 1);

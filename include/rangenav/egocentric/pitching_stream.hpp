@@ -105,6 +105,28 @@ template <std::floating_point Scalar>
           p.pitch_down_limit + f * (corridor.max - p.pitch_down_limit)};
 }
 
+/// The blind zone of a pitching scanner whose pitch axis sits at `sensor_offset` (robot frame,
+/// z = height above the floor) and that pitches down to at most `pitch_max` (rad, positive looks
+/// down): a beam at pitch a reaches height z at the horizontal distance (h - z) / tan a in front of
+/// the axis whatever its bearing (Eq. 3), so nothing lower than `height` is seen nearer than
+/// sensor_offset.x + (h - height) / tan(pitch_max) ahead of the robot's origin. Use it as
+/// VirtualMapParams::blind_range. Throws invalid_argument unless 0 < pitch_max < pi / 2 and
+/// height < h.
+template <std::floating_point Scalar>
+[[nodiscard]] Scalar pitching_blind_range(const Point<3, Scalar>& sensor_offset, Scalar pitch_max,
+                                          Scalar height = Scalar(0)) {
+  constexpr std::string_view where = "pitching_blind_range";
+  if (!sensor_offset.allFinite()) detail::throw_invalid(where, "sensor_offset must be finite");
+  if (!(pitch_max > Scalar(0) && pitch_max < std::numbers::pi_v<Scalar> / 2))
+    detail::throw_invalid_argument(where, "pitch_max", pitch_max, "must be in (0, pi / 2)");
+  if (!(height < sensor_offset.z()))
+    detail::throw_invalid_argument(
+        where, "height", height,
+        "must be below the sensor height " + detail::format_value(sensor_offset.z()));
+  return std::max(Scalar(0),
+                  sensor_offset.x() + (sensor_offset.z() - height) / std::tan(pitch_max));
+}
+
 // ---- stream helpers --------------------------------------------------------------------------
 
 namespace detail {

@@ -212,6 +212,15 @@ struct VirtualMapParams {
   /// A point transformed more than this many times becomes a dummy (§4.4.2: 500, about 5 s with
   /// the pitching scanner's 75 Hz).
   std::uint32_t max_age{500};
+  /// m; points nearer to the robot's origin than this are not removed by age. §4.4.2 removes old
+  /// points because a static obstacle "will immediately be measured again" while it is still in
+  /// the virtual corridor; that fails where the sensor cannot look: a pitching scanner does not
+  /// see the floor nearer than pitching_blind_range() (egocentric/pitching_stream.hpp), a ToF
+  /// camera tilted down has a similar blind zone. An obstacle the robot stopped in front of would
+  /// otherwise be forgotten while the robot turns on the spot, and then hit. A point that leaves
+  /// the blind zone is aged out at the next transformation if it is old enough. 0: the paper's
+  /// rule.
+  Scalar blind_range{0};
 
   void validate(std::string_view where = "VirtualMapParams") const {
     detail::require_positive(where, "aperture", aperture);
@@ -223,6 +232,7 @@ struct VirtualMapParams {
           where, "resolution", resolution,
           "must not exceed the aperture " + detail::format_value(aperture));
     detail::require_positive(where, "max_range", max_range);
+    detail::require_non_negative(where, "blind_range", blind_range);
   }
 };
 
@@ -380,10 +390,12 @@ class VirtualMap {
     const Scalar tx = -(c * motion.x - s * motion.y), ty = -(s * motion.x + c * motion.y);
     const Scalar max_range = params_.max_range;
     const std::uint32_t max_age = params_.max_age;
+    const Scalar blind_range = params_.blind_range;
     std::copy(dummies_.begin(), dummies_.end(), scratch_.begin());
     for (const std::uint32_t i : valid_indices_) {
       const bin_type& b = bins_[i];
-      if (b.age >= max_age) {  // would exceed max_age with this transformation (step 2)
+      // Would exceed max_age with this transformation (step 2), unless the sensor cannot see it.
+      if (b.age >= max_age && !(b.range < blind_range)) {
         ++stats.aged_out;
         continue;
       }
@@ -410,7 +422,7 @@ class VirtualMap {
       dst.z = b.z;
       dst.range = range;
       dst.bearing = bearing;
-      dst.age = b.age + 1;
+      dst.age = b.age < max_age ? b.age + 1 : max_age;  // no overflow in the blind zone
       dst.dummy = false;
     }
     std::swap(bins_, scratch_);
