@@ -325,6 +325,32 @@ TEST_CASE("HAYAI reports failure instead of a wrong pose", "[registration][hayai
     two.min_matched_features = 2;
     CHECK(register_hayai(a, b, two).status == HayaiStatus::featureless);
   }
+  SECTION("two pairs are accepted only where the prediction confirms them") {
+    // A wall with a doorway: its two door frames are the only features (near ends of jumps).
+    const World doorway{
+        {{3.0, -100.0}, {3.0, -0.45}}, {{3.0, 0.45}, {3.0, 100.0}}, {{8.0, -100.0}, {8.0, 100.0}}};
+    const Pose2d shift{0.04, 0.01, deg_to_rad(0.5)};
+    const auto a = cast(doorway, {}, front_scan(361));
+    const auto b = cast(doorway, shift, front_scan(361));
+    REQUIRE(extract_hayai_features(a).size() == 2);
+    // Near the prediction, two pairs give the pose (exactly, up to the jump ends' half beam).
+    const auto near = register_hayai(a, b, {}, Pose2d{0.03, 0.0, 0.0});
+    REQUIRE(near.ok());
+    CHECK(near.matched == 2);
+    CHECK(near.shift.x == Approx(shift.x).margin(0.01));
+    CHECK(near.shift.y == Approx(shift.y).margin(0.01));
+    CHECK(near.shift.theta == Approx(shift.theta).margin(deg_to_rad(0.3)));
+    // Far from it (beyond the unverified gates) nothing checks them: reported, no pose.
+    const auto far = register_hayai(a, b, {}, Pose2d{0.2, 0.0, 0.0});
+    CHECK(far.status == HayaiStatus::unconfirmed);
+    CHECK(far.matched == 2);
+    CHECK(far.shift == Pose2d{});
+    CHECK(to_string(far.status) == "unconfirmed");
+    // Requiring three pairs, as for every pose, turns two into too few.
+    HayaiParams<double> three;
+    three.min_matched_features = 3;
+    CHECK(register_hayai(a, b, three, Pose2d{0.03, 0.0, 0.0}).status == HayaiStatus::featureless);
+  }
   SECTION("two coincident features cannot fix the rotation") {
     std::vector<HayaiFeature<double>> m(2), d(2);
     for (auto* set : {&m, &d})
@@ -500,26 +526,37 @@ TEST_CASE("the tracker fuses odometry and falls back to it", "[registration][hay
     CHECK(lost.pose.x == Approx(odometry.x));
     CHECK(to_string(lost.source) == "none");
   }
-  SECTION("a HAYAI shift that contradicts the odometry is rejected by the gate") {
-    HayaiTracker<double> t;
+  SECTION("when HAYAI and the odometry disagree, redundancy decides") {
     const auto hex = hexagon_room();
-    t.track(cast(hex, {}, full_turn_scan(720)));
-    // The scans say the robot stood still; odometry claims 0.25 m (a slipping wheel). HAYAI
-    // still matches (the features are within the gate), but its shift is far outside the
-    // odometry's uncertainty.
+    // The scans say the robot stood still; odometry claims 0.25 m (a slipping wheel), far
+    // outside its uncertainty. HAYAI still matches (the features are within the gate), on six
+    // pairs that check each other: its shift is kept alone.
     const Pose2d slip{0.25, 0.0, 0.0};
+    HayaiTracker<double> t;
+    t.track(cast(hex, {}, full_turn_scan(720)));
     const auto r = t.track(cast(hex, {}, full_turn_scan(720)), slip);
     REQUIRE(r.match.ok());
+    CHECK(r.match.matched == 6);
     CHECK(r.match.shift.x == Approx(0.0).margin(1e-9));
     CHECK(r.innovation_rejected);
-    CHECK(r.source == HayaiIncrementSource::odometry);
-    CHECK(r.increment == slip);
-    // A generous gate lets HAYAI win instead.
+    CHECK(r.source == HayaiIncrementSource::hayai);
+    CHECK(r.increment == r.match.shift);
+    // With fewer pairs than trusted_matches the odometry wins the disagreement.
+    HayaiOdometryNoise<double> sceptical;
+    sceptical.trusted_matches = 7;
+    HayaiTracker<double> s({}, sceptical);
+    s.track(cast(hex, {}, full_turn_scan(720)));
+    const auto o = s.track(cast(hex, {}, full_turn_scan(720)), slip);
+    CHECK(o.innovation_rejected);
+    CHECK(o.source == HayaiIncrementSource::odometry);
+    CHECK(o.increment == slip);
+    // A generous gate fuses the two instead.
     HayaiOdometryNoise<double> loose;
     loose.innovation_gate = 1e6;
     HayaiTracker<double> trusting({}, loose);
     trusting.track(cast(hex, {}, full_turn_scan(720)));
     const auto trusted = trusting.track(cast(hex, {}, full_turn_scan(720)), slip);
+    CHECK_FALSE(trusted.innovation_rejected);
     CHECK(trusted.source == HayaiIncrementSource::fused);
     CHECK(std::abs(trusted.increment.x) < 0.03);  // odometry claimed 0.25
   }
