@@ -161,11 +161,11 @@ class DoorAwareMcl {
     out.end_points.clear();
     out.segments.clear();
     const auto& valid = scan.valid_indices();
-    for (std::size_t k = 0; k < valid.size(); k += params_.field.beam_stride) {
+    for_each_used_beam(valid.size(), params_.field, [&](std::size_t k) {
       const auto& q = scan.point(valid[k]);
       out.end_points.push_back(
           sensor_pose.transform_point(Point2d(double(q.x()), double(q.y()))).cast<float>());
-    }
+    });
     // Runs of neighbouring valid beams without a jump, each simplified by Douglas-Peucker.
     Line run, simple;
     const auto flush = [&] {
