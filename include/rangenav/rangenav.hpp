@@ -17,6 +17,7 @@
 #include "rangenav/egocentric/floor.hpp"
 #include "rangenav/egocentric/gaze.hpp"
 #include "rangenav/egocentric/pitching_stream.hpp"
+#include "rangenav/egocentric/sweep_reduction.hpp"
 #include "rangenav/egocentric/tof_obstacles.hpp"
 #include "rangenav/egocentric/virtual_map.hpp"
 #include "rangenav/geometry/planar_polygon.hpp"
