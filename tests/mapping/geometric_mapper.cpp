@@ -122,6 +122,18 @@ TEST_CASE("GeometricMapper registers a key frame from a perturbed pose guess", "
   CHECK(rotation_angle(error) < 0.01);
   CHECK(mapper.key_frames() == 2);
   CHECK(!report.planes.empty());
+  // Aggregation: the second frame's planes of the floor, the wall and the kitchen front merge
+  // into the first frame's shapes, so the map holds one large floor, merged once (small patches
+  // seen between the table's legs may stay apart).
+  CHECK(report.merged >= 3);
+  int floors = 0;
+  for (const auto& s : mapper.map().shapes())
+    if (std::abs(s.surface.plane.normal.z()) > 0.99 && std::abs(s.surface.plane.d) < 0.02 &&
+        s.surface.area() > 0.5) {
+      ++floors;
+      CHECK(s.delta == 2);
+    }
+  CHECK(floors == 1);
 }
 
 TEST_CASE("GeometricMapper rejects a frame that does not fit the map and bad parameters",

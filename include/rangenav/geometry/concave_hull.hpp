@@ -8,11 +8,11 @@
 // convex polygon when four or more sites are cocircular, common on a snapped grid) whose sites are
 // the cells around the vertex, and its distance to those sites is the face's circumradius. The
 // alpha shape keeps the faces with circumradius <= alpha (PCL's ConcaveHull and CGAL's
-// regularised alpha shape make the same choice); its boundary is every directed face edge whose
-// reverse is not an edge of a kept face. The boundary edges are chained into rings, interior on
-// the left, and a vertex where two kept parts touch is split so that every ring is simple; rings
-// come out counter-clockwise (outer boundaries) or clockwise (holes), and each hole goes to the
-// outer ring around it.
+// regularised alpha shape make the same choice); its boundary is every Delaunay edge (the dual of
+// a Voronoi edge) with a kept face on one side only. The boundary edges are chained into rings,
+// interior on the left, and a vertex where two kept parts touch is split so that every ring is
+// simple; rings come out counter-clockwise (outer boundaries) or clockwise (holes), and each hole
+// goes to the outer ring around it.
 //
 // Input coordinates are snapped to an integer grid (IntegerGrid, default 1 mm) as Boost.Polygon
 // requires; duplicates after snapping count once, and hull vertices are grid points.
@@ -132,35 +132,47 @@ class ConcaveHull {
     }
 
     // Kept Delaunay faces: circumradius (the Voronoi vertex's distance to a site) <= alpha, both
-    // in grid steps. Their directed edges, counter-clockwise around each face.
+    // in grid steps.
     const double alpha = params_.alpha / params_.resolution;
     const double alpha_sq = alpha * alpha;
-    edges_.clear();
-    for (const auto& v : vd.vertices()) {
-      const auto* start = v.incident_edge();
-      const cell_type& s0 = sites_[start->cell()->source_index()];
+    const auto& vertices = vd.vertices();
+    kept_.resize(vertices.size());
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+      const auto& v = vertices[i];
+      const cell_type& s0 = sites_[v.incident_edge()->cell()->source_index()];
       const double dx = v.x() - s0[0], dy = v.y() - s0[1];
-      if (dx * dx + dy * dy > alpha_sq) continue;
-      face_.clear();
-      const auto* e = start;
-      do {  // rot_next turns counter-clockwise around the vertex; each edge's cell is on its left
-        face_.push_back(static_cast<std::uint32_t>(e->cell()->source_index()));
-        e = e->rot_next();
-      } while (e != start);
-      if (signed_area2(face_) < 0) std::reverse(face_.begin(), face_.end());
-      for (std::size_t k = 0; k < face_.size(); ++k) {
-        edges_.push_back({face_[k], face_[(k + 1) % face_.size()]});
-        parent_[find(face_[k])] = find(face_[0]);  // the face's sites form one piece
-      }
+      kept_[i] = dx * dx + dy * dy <= alpha_sq ? 1 : 0;
     }
-    std::sort(edges_.begin(), edges_.end());
-
-    // Boundary: directed edges without their reverse.
+    // Every Voronoi edge (a twin pair) is dual to the Delaunay edge between its two cells' sites
+    // a and b, and its two vertices are the faces on either side. The Delaunay edge belongs to
+    // the shape when a face on either side is kept (a and b are then in one piece), and to the
+    // boundary when exactly one is, directed so that the kept face, i.e. its third site c, lies
+    // on its left.
+    const auto* vertex0 = vertices.data();
+    const auto is_kept = [&](const auto* v) {
+      return v != nullptr && kept_[static_cast<std::size_t>(v - vertex0)] != 0;
+    };
     boundary_.clear();
-    for (const DirectedEdge& de : edges_)
-      if (!std::binary_search(edges_.begin(), edges_.end(), DirectedEdge{de.to, de.from}))
-        boundary_.push_back(de);
-    if (boundary_.empty()) return result;  // sorted by `from` already
+    const auto& all_edges = vd.edges();
+    for (std::size_t k = 0; k + 1 < all_edges.size(); k += 2) {  // twins are stored side by side
+      const auto& e = all_edges[k];
+      const bool k0 = is_kept(e.vertex0()), k1 = is_kept(e.vertex1());
+      if (!k0 && !k1) continue;
+      const auto a = static_cast<std::uint32_t>(e.cell()->source_index());
+      const auto b = static_cast<std::uint32_t>(e.twin()->cell()->source_index());
+      parent_[find(a)] = find(b);
+      if (k0 && k1) continue;
+      // The next (or previous) edge of a's cell meets e at the kept face's vertex; its twin's
+      // cell is a third site of that face.
+      const auto* side = k1 ? e.next() : e.prev();
+      const auto c = static_cast<std::uint32_t>(side->twin()->cell()->source_index());
+      const cell_type &pa = sites_[a], &pb = sites_[b], &pc = sites_[c];
+      const double orient = double(pb[0] - pa[0]) * double(pc[1] - pa[1]) -
+                            double(pb[1] - pa[1]) * double(pc[0] - pa[0]);
+      boundary_.push_back(orient > 0 ? DirectedEdge{a, b} : DirectedEdge{b, a});
+    }
+    if (boundary_.empty()) return result;
+    std::sort(boundary_.begin(), boundary_.end());
 
     // Chain into rings. At a vertex with several outgoing boundary edges take the first one
     // clockwise from the edge we came along, which closes the tightest loop and keeps rings
@@ -295,8 +307,7 @@ class ConcaveHull {
   std::vector<std::uint32_t> site_of_point_;
   std::vector<std::uint32_t> parent_;        // union-find over sites
   std::vector<std::int32_t> piece_of_root_;  // union-find root -> polygon index or -1
-  std::vector<std::uint32_t> face_;
-  std::vector<DirectedEdge> edges_;
+  std::vector<std::uint8_t> kept_;  // per Voronoi vertex: its Delaunay face is in the shape
   std::vector<DirectedEdge> boundary_;
   std::vector<std::uint8_t> used_;
 };

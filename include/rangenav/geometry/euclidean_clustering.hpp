@@ -80,7 +80,10 @@ template <RadiusSearch S>
     cluster.clear();
     cluster.push_back(static_cast<std::uint32_t>(seed));
     for (std::size_t head = 0; head < cluster.size(); ++head) {
-      search.radius(search.point(cluster[head]), tol_sq, neighbors);
+      if constexpr (requires { search.radius(search.point(0), tol_sq, neighbors, false); })
+        search.radius(search.point(cluster[head]), tol_sq, neighbors, false);  // unsorted
+      else
+        search.radius(search.point(cluster[head]), tol_sq, neighbors);
       for (const auto& nb : neighbors) {
         const auto j = static_cast<std::size_t>(nb.index);
         if (visited[j]) continue;

@@ -1,5 +1,5 @@
 #pragma once
-// The geometric-mapping pipeline of paper 004 (Fig. 1, §3.1-3.3) up to the extracted planes:
+// The geometric-mapping pipeline of paper 004 (Fig. 1, §3.1-3.4):
 //   key frames (a KeyFrameSelector on the odometry: only frames taken after the sensor moved
 //   enough are processed at all) -> registration by the IncrementalMapper (voxel downsampling,
 //   ICP of the downsampled frame against the point map with a DecayingDistanceRejector and a
@@ -8,9 +8,9 @@
 //   joins the SparsePointMap) -> the full-resolution frame, transformed by the registration, is
 //   clustered (euclidean_clusters on a KdTree) and its planes extracted per cluster
 //   (PlaneExtractor: iterative RANSAC, least-squares refit, alpha-shape hull).
+//   -> the planes are merged into the GeometricMap (mapping/geometric_map.hpp, §3.4).
 // The stages are public so that a caller (or a benchmark) can run and time them one by one;
-// process() runs them in order. The planes of a key frame are handed to the geometric map
-// (mapping/geometric_map.hpp) for aggregation.
+// process() runs them in order.
 
 #include <cstddef>
 #include <cstdint>
@@ -27,6 +27,7 @@
 #include "rangenav/geometry/euclidean_clustering.hpp"
 #include "rangenav/geometry/plane_extraction.hpp"
 #include "rangenav/geometry/voxel_grid.hpp"
+#include "rangenav/mapping/geometric_map.hpp"
 #include "rangenav/mapping/incremental_mapper.hpp"
 #include "rangenav/mapping/key_frame.hpp"
 #include "rangenav/mapping/sparse_point_map.hpp"
@@ -64,13 +65,15 @@ struct GeometricMapperParams {
   double initial_match_distance = 0.3;
   double final_match_distance = 0.08;
   /// Fitness rejection: a frame whose ICP fitness (matched / data points) is below this, or
-  /// whose ICP found too few pairs, is not used.
-  double min_fitness = 0.6;
+  /// whose ICP found too few pairs, is not used (the IncrementalMapper's default).
+  double min_fitness = 0.3;
   /// Plane extraction runs on the full-resolution aligned frame (0), or on the frame voxel-
   /// filtered at this leaf size (m) to bound its cost.
   double extraction_leaf = 0.0;
   EuclideanClusteringParams clustering{0.05, 500, std::numeric_limits<std::size_t>::max()};
   PlaneExtractionParams planes{};
+  /// Aggregation: the similarity thresholds t1, t2 of Eq. (6).
+  GeometricMapParameters<double> merging{};
 
   void validate(std::string_view where) const {
     key_frames.validate();
@@ -97,6 +100,7 @@ struct GeometricFrameReport {
   std::size_t extraction_points = 0;  ///< finite points the plane extraction saw
   std::size_t clusters = 0;
   std::vector<ExtractedPlane> planes;  ///< in world coordinates
+  std::size_t merged = 0;              ///< planes merged into existing map shapes
 };
 
 /// Registration and plane extraction of paper 004's pipeline (see the file comment). Owns the
@@ -110,7 +114,8 @@ class GeometricMapper {
       : params_(validated(params)),
         selector_(params_.key_frames),
         registration_(registration_params(params_)),
-        extractor_(params_.planes) {
+        extractor_(params_.planes),
+        map_(params_.merging) {
     auto& icp = registration_.icp;
     icp.params = params_.icp;
     icp.rejector<DecayingDistanceRejector<double>>() = {params_.initial_match_distance,
@@ -125,6 +130,9 @@ class GeometricMapper {
   [[nodiscard]] const SparsePointMap<3, double>& point_map() const { return registration_.map(); }
   /// The pose of the point map's frame in the world (identity before the first key frame).
   [[nodiscard]] Transform3d map_origin() const { return origin_.value_or(Transform3d::Identity()); }
+  /// The geometric map (the editing API of GeometricMap works on it).
+  [[nodiscard]] const GeometricMap<double>& map() const { return map_; }
+  [[nodiscard]] GeometricMap<double>& map() { return map_; }
   /// Key frames registered so far.
   [[nodiscard]] std::size_t key_frames() const { return key_frames_; }
 
@@ -139,6 +147,7 @@ class GeometricMapper {
     if (!report.key_frame) return report;
     if (!register_frame(cloud, odometry, report)) return report;
     extract_planes(cloud, report, rng);
+    merge_planes(report);
     return report;
   }
 
@@ -185,6 +194,15 @@ class GeometricMapper {
       extractor_.extract(std::span<const Point3d>(tree.points()), cluster, rng, report.planes);
   }
 
+  /// Stage 3: inserts the key frame's planes into the geometric map (Eq. 6-12); sets and
+  /// returns report.merged.
+  std::size_t merge_planes(GeometricFrameReport& report) {
+    report.merged = 0;
+    for (const ExtractedPlane& p : report.planes)
+      report.merged += map_.insert(p.shape).merged > 0 ? 1 : 0;
+    return report.merged;
+  }
+
  private:
   static const GeometricMapperParams& validated(const GeometricMapperParams& p) {
     p.validate("GeometricMapper");
@@ -204,6 +222,7 @@ class GeometricMapper {
   KeyFrameSelector<3, double> selector_;
   IncrementalMapper<3, double, IcpType> registration_;
   PlaneExtractor extractor_;
+  GeometricMap<double> map_;
   std::size_t key_frames_ = 0;
   std::optional<Transform3d> origin_;
   std::vector<Point3d> world_;
