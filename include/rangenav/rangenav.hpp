@@ -21,9 +21,14 @@
 #include "rangenav/egocentric/tof_obstacles.hpp"
 #include "rangenav/egocentric/virtual_map.hpp"
 #include "rangenav/geometry/planar_polygon.hpp"
+#include "rangenav/geometry/polygon_clipper.hpp"
+#ifdef RANGENAV_HAVE_CLIPPER  // the optional Vatti backend (target rangenav::clipper)
+#include "rangenav/geometry/vatti_clipper.hpp"
+#endif
 #include "rangenav/geometry/voxel_grid.hpp"
 #include "rangenav/io/carmen.hpp"
 #include "rangenav/io/line_reader.hpp"
+#include "rangenav/io/mrpt_pose.hpp"
 #include "rangenav/io/pcd.hpp"
 #include "rangenav/io/pgm.hpp"
 #include "rangenav/io/ply.hpp"
@@ -37,6 +42,7 @@
 #include "rangenav/localization/odometry_motion_model.hpp"
 #include "rangenav/localization/particle_filter.hpp"
 #include "rangenav/mapping/doors.hpp"
+#include "rangenav/mapping/geometric_map.hpp"
 #include "rangenav/mapping/incremental_mapper.hpp"
 #include "rangenav/mapping/key_frame.hpp"
 #include "rangenav/mapping/occupancy_grid.hpp"
