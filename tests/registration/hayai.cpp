@@ -9,6 +9,8 @@
 
 #include "rangenav/core/angles.hpp"
 #include "rangenav/registration/hayai.hpp"
+#include "rangenav/sim/sensors.hpp"
+#include "rangenav/sim/worlds.hpp"
 
 using namespace rangenav;
 
@@ -340,8 +342,9 @@ TEST_CASE("HAYAI reports failure instead of a wrong pose", "[registration][hayai
     CHECK(near.shift.x == Approx(shift.x).margin(0.01));
     CHECK(near.shift.y == Approx(shift.y).margin(0.01));
     CHECK(near.shift.theta == Approx(shift.theta).margin(deg_to_rad(0.3)));
-    // Far from it (beyond the unverified gates) nothing checks them: reported, no pose.
-    const auto far = register_hayai(a, b, {}, Pose2d{0.2, 0.0, 0.0});
+    // Far from it (here 3.5° beyond the unverified rotation gate of 2°) nothing checks them:
+    // reported, no pose.
+    const auto far = register_hayai(a, b, {}, Pose2d{0.04, 0.0, deg_to_rad(4.0)});
     CHECK(far.status == HayaiStatus::unconfirmed);
     CHECK(far.matched == 2);
     CHECK(far.shift == Pose2d{});
@@ -559,6 +562,94 @@ TEST_CASE("the tracker fuses odometry and falls back to it", "[registration][hay
     CHECK_FALSE(trusted.innovation_rejected);
     CHECK(trusted.source == HayaiIncrementSource::fused);
     CHECK(std::abs(trusted.increment.x) < 0.03);  // odometry claimed 0.25
+  }
+}
+
+TEST_CASE("HAYAI in the simulator's office corridor", "[registration][hayai]") {
+  // Some office doors open: the scanner sees door frames (wall ends), the open leaves, the
+  // offices' corners through the doorways and the corridor's far end.
+  const auto scene = sim::office_corridor({1.2, 0.0, 0.9, 1.5, 0.6, 1.4, 0.0, 1.0});
+  sim::LaserScannerParams lms;
+  lms.geometry = ScanGeometry<double>::from_fov(pi, deg_to_rad(0.5), 0.05, 30.0);
+  lms.noise.sigma = 0.0;
+  const sim::LaserScanner2D exact(lms);
+  std::mt19937 rng(2005);
+  // The world's true corners: wall ends and the corners of the door leaves.
+  std::vector<Point2d> landmarks;
+  for (const auto& w : scene.world.walls()) {
+    landmarks.push_back(w.a);
+    landmarks.push_back(w.b);
+  }
+  for (const auto& d : scene.world.doors()) {
+    const auto leaf = d.leaf();
+    const Point2d u(std::cos(leaf.yaw), std::sin(leaf.yaw)), v(-u.y(), u.x());
+    for (const double a : {-0.5, 0.5})
+      for (const double b : {-0.5, 0.5})
+        landmarks.push_back(leaf.center + a * leaf.size.x() * u + b * leaf.size.y() * v);
+  }
+  const auto distance_to_landmark = [&landmarks](const Point2d& p) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& l : landmarks)
+      best = std::min(best, (l - p).norm());
+    return best;
+  };
+
+  SECTION("features lie at the world's corners and jump edges") {
+    std::size_t corners = 0, jumps = 0;
+    for (const Pose2d pose : {Pose2d{1.2, 1.0, 0.05}, Pose2d{4.0, 1.2, -0.1}, Pose2d{9.0, 0.8, 0.2},
+                              Pose2d{15.0, 1.0, 0.0}}) {
+      const auto features = extract_hayai_features(exact.scan(scene.world, pose, rng));
+      for (const auto& f : features) {
+        const Point2d world = pose.transform_point(f.position);
+        INFO("feature at " << world.transpose() << (f.jump_edge ? " (jump edge)" : " (corner)"));
+        // A jump edge lies within half a beam spacing (√3 σ of its quantisation) of the wall's
+        // end; a corner at the fitted lines' intersection, exact without noise.
+        CHECK(distance_to_landmark(world) < (f.jump_edge ? 2 * std::sqrt(3.0) * f.sigma : 0.01));
+        ++(f.jump_edge ? jumps : corners);
+      }
+    }
+    CHECK(corners >= 3);
+    CHECK(jumps >= 8);
+    // From x = 4 the door frames of the open north door n1 ahead are both found.
+    const Pose2d at{4.0, 1.0, 0.0};
+    const auto features = extract_hayai_features(exact.scan(scene.world, at, rng));
+    for (const Point2d& frame : {Point2d{7.05, 2.0}, Point2d{7.95, 2.0}}) {
+      const auto* f = nearest(features, in_frame(at, frame));
+      REQUIRE(f != nullptr);
+      CHECK(f->jump_edge);
+      CHECK(f->type == HayaiFeatureType::minimum);
+      CHECK((at.transform_point(f->position) - frame).norm() < 2 * std::sqrt(3.0) * f->sigma);
+    }
+  }
+  SECTION("a known shift is recovered from noise-free scans") {
+    const Pose2d from{1.2, 1.0, 0.05};
+    const Pose2d shift{0.06, -0.01, deg_to_rad(0.8)};
+    const auto r = register_hayai(exact.scan(scene.world, from, rng),
+                                  exact.scan(scene.world, compose(from, shift), rng));
+    REQUIRE(r.ok());
+    CHECK(r.matched >= 4);
+    CHECK(r.shift.x == Approx(shift.x).margin(0.005));
+    CHECK(r.shift.y == Approx(shift.y).margin(0.005));
+    CHECK(r.shift.theta == Approx(shift.theta).margin(deg_to_rad(0.1)));
+  }
+  SECTION("tracking at 3 m/s without odometry drifts a few per cent") {
+    // 4 cm per scan (75 Hz) weaving down the corridor from x = 1 to x = 9, 1 cm range noise.
+    lms.noise.sigma = 0.01;
+    const sim::LaserScanner2D noisy(lms);
+    const auto pose_at = [](double x) {
+      const double k = 2 * pi / 6.0;
+      return Pose2d{x, 1.0 + 0.25 * std::sin(k * x), std::atan(0.25 * k * std::cos(k * x))};
+    };
+    HayaiTracker<double> tracker({}, {}, pose_at(1.0));
+    std::size_t registered = 0, steps = 0;
+    for (double x = 1.0; x <= 9.0; x += 0.04, ++steps)
+      if (tracker.track(noisy.scan(scene.world, pose_at(x), rng)).match.ok()) ++registered;
+    const Pose2d truth = pose_at(1.0 + 0.04 * static_cast<double>(steps - 1));
+    INFO("drift " << position_error(tracker.pose(), truth) << " m over 8 m, " << registered
+                  << " of " << steps << " scans registered");
+    CHECK(position_error(tracker.pose(), truth) < 0.04 * 8.0);
+    CHECK(std::abs(angle_difference(tracker.pose().theta, truth.theta)) < deg_to_rad(10.0));
+    CHECK(registered >= steps * 9 / 10);
   }
 }
 
