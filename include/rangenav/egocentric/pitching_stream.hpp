@@ -14,7 +14,7 @@
 //    since P_b (§6.1); a sweep is dropped when the pose shifts say the robot turns fast, and the
 //    next one starts after the turn.
 //  - structure_scan(): a sweep's structure map (§4.3) as a virtual 2D scan for 3-DOF SLAM (§6.1).
-//  - reduce_to_cluster_centroids(): the first per-scan reduction step of §6.1.
+//  The per-scan reduction steps of §6.1 are in egocentric/sweep_reduction.hpp.
 
 #include <algorithm>
 #include <cmath>
@@ -103,6 +103,28 @@ template <std::floating_point Scalar>
   const Scalar f = std::clamp(std::abs(speed) / p.fast_speed, Scalar(0), Scalar(1));
   return {p.pitch_up_limit + f * (corridor.min - p.pitch_up_limit),
           p.pitch_down_limit + f * (corridor.max - p.pitch_down_limit)};
+}
+
+/// The blind zone of a pitching scanner whose pitch axis sits at `sensor_offset` (robot frame,
+/// z = height above the floor) and that pitches down to at most `pitch_max` (rad, positive looks
+/// down): a beam at pitch a reaches height z at the horizontal distance (h - z) / tan a in front of
+/// the axis whatever its bearing (Eq. 3), so nothing lower than `height` is seen nearer than
+/// sensor_offset.x + (h - height) / tan(pitch_max) ahead of the robot's origin. Use it as
+/// VirtualMapParams::blind_range. Throws invalid_argument unless 0 < pitch_max < pi / 2 and
+/// height < h.
+template <std::floating_point Scalar>
+[[nodiscard]] Scalar pitching_blind_range(const Point<3, Scalar>& sensor_offset, Scalar pitch_max,
+                                          Scalar height = Scalar(0)) {
+  constexpr std::string_view where = "pitching_blind_range";
+  if (!sensor_offset.allFinite()) detail::throw_invalid(where, "sensor_offset must be finite");
+  if (!(pitch_max > Scalar(0) && pitch_max < std::numbers::pi_v<Scalar> / 2))
+    detail::throw_invalid_argument(where, "pitch_max", pitch_max, "must be in (0, pi / 2)");
+  if (!(height < sensor_offset.z()))
+    detail::throw_invalid_argument(
+        where, "height", height,
+        "must be below the sensor height " + detail::format_value(sensor_offset.z()));
+  return std::max(Scalar(0),
+                  sensor_offset.x() + (sensor_offset.z() - height) / std::tan(pitch_max));
 }
 
 // ---- stream helpers --------------------------------------------------------------------------
@@ -356,38 +378,6 @@ template <std::floating_point Scalar>
   StructureMap<Scalar> map(params);
   map.insert(sweep.cloud.points);
   return map.to_laser_scan();
-}
-
-/// §6.1 step 1: replaces every run of consecutive points (scan order) whose neighbours are closer
-/// than `max_gap` by the run's centroid; non-finite points break runs and are dropped. Appends to
-/// `out`; returns the number of centroids.
-template <int D, std::floating_point Scalar>
-std::size_t reduce_to_cluster_centroids(std::span<const Point<D, Scalar>> points, Scalar max_gap,
-                                        std::vector<Point<D, Scalar>>& out) {
-  detail::require_positive("reduce_to_cluster_centroids", "max_gap", max_gap);
-  const Scalar gap_sq = max_gap * max_gap;
-  const std::size_t before = out.size();
-  Point<D, Scalar> sum = Point<D, Scalar>::Zero();
-  std::size_t n = 0;
-  const Point<D, Scalar>* last = nullptr;
-  for (const auto& p : points) {
-    if (!p.allFinite()) {
-      if (n > 0) out.push_back(sum / static_cast<Scalar>(n));
-      n = 0;
-      last = nullptr;
-      continue;
-    }
-    if (last != nullptr && (p - *last).squaredNorm() >= gap_sq) {
-      out.push_back(sum / static_cast<Scalar>(n));
-      n = 0;
-    }
-    if (n == 0) sum.setZero();
-    sum += p;
-    ++n;
-    last = &p;
-  }
-  if (n > 0) out.push_back(sum / static_cast<Scalar>(n));
-  return out.size() - before;
 }
 
 }  // namespace rangenav
