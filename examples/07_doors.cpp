@@ -13,8 +13,9 @@
 //      per door in every particle, §IV), printing the mean and maximum position errors;
 //   4. draw the grid with the detected doors' angle ranges (like the paper's Fig. 4) to
 //      doors_out/doors.svg and end with one JSON line.
-// `07_doors --global [runs] [particle counts...]` instead measures global-localization success
-// rates of both filters (the paper's Fig. 8-9) with doors closed and 30 deg open.
+// `07_doors --global [runs] [distance] [particle counts...]` instead measures global-localization
+// success rates of both filters (the paper's Fig. 8-9) with doors closed and 30 deg open
+// (defaults: 10 runs, 12 m, 1k 5k 10k 50k particles).
 //
 // Run it as `07_doors [seed]`.
 
@@ -75,6 +76,7 @@ TrackingResult track(const sim::World& world, const OccupancyGrid& grid,
   MonteCarloLocalization<> mcl(OdometryMotionModel(motion), LikelihoodFieldModel(grid), mp);
   DoorAwareMclParams dp;
   dp.motion = motion;
+  dp.sampling = mp;
   DoorAwareMcl door_mcl(grid, doors, dp);
   std::mt19937_64 sim_rng(seed), rng_a(seed + 1), rng_b(seed + 1);
   mcl.initialize_gaussian(robot.pose(), {0.05, 0.05, 0.02}, particles, rng_a);
@@ -111,12 +113,24 @@ TrackingResult track(const sim::World& world, const OccupancyGrid& grid,
   return r;
 }
 
+/// One global-localization run's outcome for one filter.
+struct GlobalOutcome {
+  bool success{false};
+  double error_m{0}, error_rad{0};
+  std::size_t particles{0};
+};
+
 /// Global localization (§V.C): both filters start uniform over the free cells with `particles`
-/// particles (a fixed count here) while the robot drives 9 m along the corridor; a run succeeds
-/// when the final estimate is within 0.3 m and 0.1 rad of the truth.
-std::pair<bool, bool> global_run(const sim::World& world, const OccupancyGrid& grid,
-                                 const std::vector<DoorModel>& doors, std::size_t particles,
-                                 std::uint64_t seed) {
+/// particles; KLD-sampling then adapts the count to the pose uncertainty (down to 500) while the
+/// robot drives `distance` metres east along the corridor from a random x in [1, 6]. A run
+/// succeeds when, at the end, the estimate is within 0.3 m and 0.1 rad of the truth and the
+/// particle count has fallen to at most 1000 (the paper: "the localization error and the number
+/// of particles falls below a threshold").
+std::pair<GlobalOutcome, GlobalOutcome> global_run(const sim::World& world,
+                                                   const OccupancyGrid& grid,
+                                                   const std::vector<DoorModel>& doors,
+                                                   std::size_t particles, double distance,
+                                                   std::uint64_t seed) {
   sim::LaserScannerParams lp;
   lp.geometry = ScanGeometry<double>::from_fov(std::numbers::pi, deg_to_rad(1.0), 0.05, 30.0);
   const sim::LaserScanner2D laser(lp);
@@ -126,25 +140,23 @@ std::pair<bool, bool> global_run(const sim::World& world, const OccupancyGrid& g
   rp.odometry.v_sigma = 0.05;
   rp.odometry.omega_sigma = 0.05;
   std::mt19937_64 sim_rng(seed), rng_a(seed + 1), rng_b(seed + 1);
-  const double start_x = std::uniform_real_distribution<double>(1.0, 9.0)(sim_rng);
+  const double start_x = std::uniform_real_distribution<double>(1.0, 6.0)(sim_rng);
   sim::DifferentialDriveRobot robot(rp, {start_x, 1.0, 0.0});
   const OdometryMotionParams motion{0.1, 0.05, 0.1, 0.05};
-  LikelihoodFieldParams field;
-  field.sigma_hit = 0.2;  // flatter than for tracking: see tests/localization/mcl.cpp
   MclParams mp;
-  mp.min_particles = mp.max_particles = particles;
-  mp.adapt_particle_count = false;
-  MonteCarloLocalization<> mcl(OdometryMotionModel(motion), LikelihoodFieldModel(grid, field), mp);
+  mp.min_particles = std::min<std::size_t>(500, particles);
+  mp.max_particles = particles;
+  MonteCarloLocalization<> mcl(OdometryMotionModel(motion), LikelihoodFieldModel(grid), mp);
   DoorAwareMclParams dp;
   dp.motion = motion;
-  dp.field = field;
+  dp.sampling = mp;
   DoorAwareMcl door_mcl(grid, doors, dp);
   mcl.initialize_uniform(grid, particles, rng_a);
   door_mcl.initialize_uniform(grid, particles, rng_b);
   LikelihoodFieldModel::Observation z;
   DoorAwareObservation dz;
   Pose2d last = robot.odometry();
-  while (robot.pose().x < start_x + 9.0) {
+  while (robot.pose().x < start_x + distance) {
     for (int k = 0; k < 10; ++k) {
       const Pose2d& p = robot.pose();
       robot.step(world, 0.5, -1.5 * (p.y - 1.0) - 2.0 * p.theta, sim_rng);
@@ -157,11 +169,16 @@ std::pair<bool, bool> global_run(const sim::World& world, const OccupancyGrid& g
     door_mcl.update(u, dz, rng_b);
     last = robot.odometry();
   }
-  const auto ok = [&](const Pose2d& e) {
-    return (e.position() - robot.pose().position()).norm() < 0.3 &&
-           std::abs(angle_difference(e.theta, robot.pose().theta)) < 0.1;
+  const auto outcome = [&](const Pose2d& e, std::size_t n) {
+    GlobalOutcome o;
+    o.error_m = (e.position() - robot.pose().position()).norm();
+    o.error_rad = std::abs(angle_difference(e.theta, robot.pose().theta));
+    o.particles = n;
+    o.success = o.error_m < 0.3 && o.error_rad < 0.1 && n <= 1000;
+    return o;
   };
-  return {ok(mcl.estimate()), ok(door_mcl.estimate())};
+  return {outcome(mcl.estimate(), mcl.particle_count()),
+          outcome(door_mcl.estimate(), door_mcl.particle_count())};
 }
 
 std::string fixed(double v, int digits = 3) {
@@ -173,8 +190,8 @@ std::string fixed(double v, int digits = 3) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // `07_doors --global runs n1 n2 ...`: the global-localization success rates instead of the
-  // default lesson (slow: minutes for 10 runs of 10k particles).
+  // `07_doors --global runs distance n1 n2 ...`: the global-localization success rates instead of
+  // the default lesson (slow: see benchmarks/README.md).
   const bool global = argc > 1 && std::string(argv[1]) == "--global";
   const std::uint64_t seed = argc > 1 && !global ? std::strtoull(argv[1], nullptr, 10) : 1;
 
@@ -218,9 +235,11 @@ int main(int argc, char** argv) {
   detector.remove_doors(grid);
 
   if (global) {
+    // `07_doors --global runs distance n1 n2 ...`
     const std::uint64_t runs = argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 10;
+    const double distance = argc > 3 ? std::strtod(argv[3], nullptr) : 12.0;
     std::vector<std::size_t> counts;
-    for (int i = 3; i < argc; ++i)
+    for (int i = 4; i < argc; ++i)
       counts.push_back(std::strtoull(argv[i], nullptr, 10));
     if (counts.empty()) counts = {1000, 5000, 10000, 50000};
     std::string json;
@@ -229,19 +248,26 @@ int main(int argc, char** argv) {
       for (const std::size_t n : counts) {
         std::size_t mcl_ok = 0, door_ok = 0;
         for (std::uint64_t r = 0; r < runs; ++r) {
-          const auto [a, b] = global_run(scene.world, grid, doors, n, 100 + r);
-          mcl_ok += a ? 1 : 0;
-          door_ok += b ? 1 : 0;
+          const auto [a, b] = global_run(scene.world, grid, doors, n, distance, 100 + r);
+          mcl_ok += a.success ? 1 : 0;
+          door_ok += b.success ? 1 : 0;
+          std::cout << "  run " << r << ": MCL " << fixed(a.error_m, 2) << " m "
+                    << fixed(a.error_rad, 2) << " rad " << a.particles << " particles; door-aware "
+                    << fixed(b.error_m, 2) << " m " << fixed(b.error_rad, 2) << " rad "
+                    << b.particles << " particles\n"
+                    << std::flush;
         }
         std::cout << "global localization, doors " << (opening == 0 ? "closed" : "30 deg open")
                   << ", " << n << " particles: MCL " << mcl_ok << "/" << runs << ", door-aware "
-                  << door_ok << "/" << runs << "\n";
+                  << door_ok << "/" << runs << "\n"
+                  << std::flush;
         json += std::string(json.empty() ? "" : ", ") + "\"" +
                 (opening == 0 ? "closed_" : "partially_open_") + std::to_string(n) + "\": [" +
                 std::to_string(mcl_ok) + ", " + std::to_string(door_ok) + "]";
       }
     }
-    std::cout << "{\"runs\": " << runs << ", \"successes_mcl_door_mcl\": {" << json << "}}\n";
+    std::cout << "{\"runs\": " << runs << ", \"distance_m\": " << fixed(distance, 1)
+              << ", \"successes_mcl_door_mcl\": {" << json << "}}\n";
     return 0;
   }
 

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "rangenav/egocentric/pitching_stream.hpp"
+#include "rangenav/egocentric/sweep_reduction.hpp"
 
 using namespace rangenav;
 
@@ -80,9 +81,74 @@ TEST_CASE("cluster centroids replace runs of close points (§6.1)", "[egocentric
   CHECK(out[0].isApprox(Point2d(0.01, 0)));
   CHECK(out[1].isApprox(Point2d(1, 0)));
   CHECK(out[2].isApprox(Point2d(1.005, 0)));
-  CHECK_THROWS_WITH(reduce_to_cluster_centroids(std::span<const Point2d>(pts), 0.0, out),
-                    "rangenav: reduce_to_cluster_centroids: argument 'max_gap' = 0 must be finite "
-                    "and > 0");
+  CHECK_THROWS_WITH(
+      reduce_to_cluster_centroids(std::span<const Point2d>(pts), 0.0, out),
+      "rangenav: reduce_to_cluster_centroids: argument 'max_distance' = 0 must be finite "
+      "and > 0");
+}
+
+TEST_CASE("line segments: ratio growth, split at corners, gaps and invalid points end lines",
+          "[egocentric][reduction]") {
+  // An L of two walls, 5 cm spacing and +-2 mm zig-zag noise: two lines meeting at (2, 1).
+  std::vector<Point2d> pts;
+  for (int i = 0; i <= 40; ++i)
+    pts.emplace_back(0.05 * i, 1.0 + (i % 2 == 0 ? 0.002 : -0.002));
+  for (int i = 1; i <= 30; ++i)
+    pts.emplace_back(2.0 + (i % 2 == 0 ? 0.002 : -0.002), 1.0 + 0.05 * i);
+  std::vector<LineSegment<2, double>> lines;
+  LineDetectionScratch stack;
+  const LineDetectionParams<double> params;
+  REQUIRE(detect_line_segments(std::span<const Point2d>(pts), params, lines, stack) == 2);
+  CHECK(lines[0].a.isApprox(Point2d(0.0, 1.0), 0.01));
+  CHECK(lines[0].b.x() == Approx(2.0).margin(0.01));
+  CHECK(std::abs(lines[0].direction.y()) < 0.01);
+  CHECK(lines[0].rms == Approx(0.002).margin(0.0005));
+  CHECK(lines[1].b.isApprox(Point2d(2.0, 2.5), 0.01));
+  CHECK(std::abs(lines[1].direction.x()) < 0.01);
+  CHECK(lines[0].first == 0);
+  CHECK(lines[1].first + lines[1].count == pts.size());
+  // The corner point belongs to both legs; nothing else is shared.
+  CHECK(lines[0].count + lines[1].count == pts.size() + 1);
+  // A gap wider than max_gap and an invalid point each end a line; 3 points are no line.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<Point2d> broken;
+  for (int i = 0; i < 10; ++i)
+    broken.emplace_back(0.05 * i, 0.0);
+  for (int i = 0; i < 10; ++i)
+    broken.emplace_back(1.0 + 0.05 * i, 0.0);  // 0.55 m gap
+  broken.emplace_back(nan, 0.0);
+  for (int i = 0; i < 10; ++i)
+    broken.emplace_back(2.0 + 0.05 * i, 0.0);
+  broken.emplace_back(nan, 0.0);
+  for (int i = 0; i < 3; ++i)
+    broken.emplace_back(3.0 + 0.05 * i, 0.0);
+  lines.clear();
+  CHECK(detect_line_segments(std::span<const Point2d>(broken), params, lines, stack) == 3);
+  // A circle is cut into chords none of which strays from its points by more than max_distance.
+  std::vector<Point3d> arc;
+  for (int i = 0; i <= 90; ++i)
+    arc.emplace_back(std::cos(deg_to_rad(2.0 * i)), std::sin(deg_to_rad(2.0 * i)), 0.5);
+  std::vector<LineSegment<3, double>> chords;
+  CHECK(detect_line_segments(std::span<const Point3d>(arc), params, chords, stack) > 5);
+  for (const auto& c : chords) {
+    for (std::size_t k = c.first; k < c.first + c.count; ++k)
+      REQUIRE(detail::distance_to_chord_sq(arc[k], c.a, c.b) <= 0.015 * 0.015);
+    CHECK(c.a.z() == Approx(0.5));
+  }
+  LineDetectionParams<double> bad;
+  bad.min_ratio = 1.5;
+  CHECK_THROWS_WITH(
+      detect_line_segments(std::span<const Point2d>(pts), bad, lines, stack),
+      "rangenav: detect_line_segments: argument 'min_ratio' = 1.5 must lie in (0, 1]");
+  SweepReductionParams<double> bad_sweep;
+  bad_sweep.planes.min_scans = 1;
+  CHECK_THROWS_WITH(SweepReducer<double>(bad_sweep),
+                    "rangenav: SweepReducer: argument 'min_scans' = 1 must be >= 2");
+  // An empty sweep reduces to nothing.
+  SweepReducer<double> reducer;
+  const auto empty = reducer.reduce(Sweep<double>{});
+  CHECK(empty.input_points == 0);
+  CHECK(empty.reduction_ratio() == 0.0);
 }
 
 TEST_CASE("sweeps are segmented at pitch reversals and motion-compensated to the base pose",

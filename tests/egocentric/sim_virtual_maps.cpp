@@ -1,15 +1,20 @@
 // The egocentric virtual maps against the simulator's ground truth (paper 002 Fig. 2 obstacle
-// classes in the simulated apartment; a person walking past; a flat noisy floor).
+// classes in the simulated apartment; a person walking past; a flat noisy floor; the §6.1
+// reduction of a sweep of a known room).
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rangenav/egocentric/pitching_stream.hpp"
+#include "rangenav/egocentric/sweep_reduction.hpp"
 #include "rangenav/egocentric/virtual_map.hpp"
+#include "rangenav/registration/icp.hpp"
+#include "rangenav/search/kd_tree.hpp"
 #include "rangenav/sim/robot.hpp"
 #include "rangenav/sim/sensors.hpp"
 #include "rangenav/sim/worlds.hpp"
@@ -167,6 +172,134 @@ TEST_CASE("a person walking past leaves a trace that ages out", "[egocentric][si
   CHECK(trace() == 0);
 }
 
+TEST_CASE("§6.1 reduction: lines on the true walls, planes of the walls and the floor",
+          "[egocentric][sim][reduction]") {
+  // A five-walled room (one wall oblique); the robot drives at 0.2 m/s while the scanner nods.
+  const std::vector<Point2d> corners = {{0, 0}, {6, 0}, {6, 3}, {4, 4.5}, {0, 4.5}};
+  sim::World world;
+  world.add_polygon(corners, 2.5);
+  world.build_index();
+  struct TrueWall {
+    Point2d a, b, normal;
+  };
+  std::vector<TrueWall> walls;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    const Point2d a = corners[i], b = corners[(i + 1) % corners.size()];
+    const Point2d d = (b - a).normalized();
+    walls.push_back({a, b, Point2d(-d.y(), d.x())});
+  }
+  // Distance of a world point from wall w's vertical plane, and whether it lies over the wall.
+  const auto off_wall = [&](const TrueWall& w, const Point2d& p) {
+    return std::abs(w.normal.dot(p - w.a));
+  };
+  const auto over_wall = [&](const TrueWall& w, const Point2d& p) {
+    const double length = (w.b - w.a).norm();
+    const double t = (p - w.a).dot(w.b - w.a) / length;
+    return t > -0.05 && t < length + 0.05;
+  };
+  std::mt19937 rng(21);
+  const sim::PitchingScanner scanner(scanner_params());
+  SweepAssembler<double> sweeps(SweepParams<double>{scanner.params().sensor_offset});
+  SweepReducer<double> reducer;
+  SweepReduction<double> red;
+  Pose2d pose{1.5, 2.0, 0.4};
+  std::size_t reduced = 0;
+  for (std::size_t k = 0; reduced < 2; ++k) {
+    REQUIRE(k < 400);
+    const auto ps = scanner.scan(world, pose, scanner.scan_time(k), rng);
+    if (sweeps.push(ps, pose)) {
+      ++reduced;
+      const Sweep<double>& sweep = sweeps.sweep();
+      reducer.reduce(sweep, red);
+      const Pose2d base = sweep.base_pose;
+      const auto world_xy = [&](const Point3d& p) {
+        return base.transform_point(Point2d(p.x(), p.y()));
+      };
+      // Step 1: far fewer points than readings.
+      INFO("readings " << red.input_points << ", reduced " << red.points.size() << " + "
+                       << red.floor_points.size() << " floor, ratio " << red.reduction_ratio());
+      CHECK(red.input_points > 4000);
+      CHECK(red.reduction_ratio() > 1.3);
+      // Step 4: floor centroids lie on the floor, every other centroid on a wall.
+      for (const auto& p : red.floor_points)
+        REQUIRE(std::abs(p.z()) < 0.03);
+      for (const auto& p : red.points) {
+        double nearest = 1e9;
+        for (const auto& w : walls)
+          nearest = std::min(nearest, off_wall(w, world_xy(p)));
+        REQUIRE(nearest < 0.05);
+      }
+      // Step 2: every line segment lies on the floor or along one true wall, end to end.
+      std::vector<std::size_t> wall_lines(walls.size(), 0);
+      std::size_t floor_lines = 0;
+      REQUIRE(red.lines.size() > 30);
+      for (const auto& line : red.lines) {
+        CHECK(line.length() >= 0.1);
+        CHECK(line.rms < 0.01);
+        if (line.floor) {
+          ++floor_lines;
+          CHECK(std::abs(line.a.z()) < 0.03);
+          CHECK(std::abs(line.b.z()) < 0.03);
+          continue;
+        }
+        bool on_a_wall = false;
+        for (std::size_t w = 0; w < walls.size() && !on_a_wall; ++w) {
+          const Point2d a = world_xy(line.a), b = world_xy(line.b);
+          if (off_wall(walls[w], a) < 0.03 && off_wall(walls[w], b) < 0.03 &&
+              over_wall(walls[w], a) && over_wall(walls[w], b)) {
+            on_a_wall = true;
+            ++wall_lines[w];
+          }
+        }
+        INFO("line of row " << line.row << " from " << world_xy(line.a).transpose() << " to "
+                            << world_xy(line.b).transpose() << ", z " << line.a.z() << " beams "
+                            << line.first << " + " << line.count);
+        CHECK(on_a_wall);
+      }
+      CHECK(floor_lines > 5);
+      // Step 3: each wall seen by several lines and the floor are planes at their true place.
+      bool floor_plane = false;
+      std::vector<bool> wall_plane(walls.size(), false);
+      for (const auto& plane : red.planes) {
+        if (plane.normal.z() > std::cos(deg_to_rad(3.0))) {
+          CHECK(std::abs(plane.distance) < 0.02);  // z = 0 in the base frame
+          CHECK(plane.floor);
+          floor_plane = true;
+          continue;
+        }
+        // A wall: horizontal normal, in the world rotated by the base pose's heading.
+        INFO("plane n " << plane.normal.transpose() << " d " << plane.distance << " lines "
+                        << plane.line_count << " rows " << plane.first_row << "-" << plane.last_row
+                        << " rms " << plane.rms);
+        CHECK(std::abs(plane.normal.z()) < std::sin(deg_to_rad(3.0)));
+        const Point2d n = Eigen::Rotation2Dd(base.theta) *
+                          Point2d(plane.normal.x(), plane.normal.y()).normalized();
+        const Point2d c = world_xy(plane.centroid);
+        bool matched = false;
+        for (std::size_t w = 0; w < walls.size(); ++w)
+          if (std::abs(n.dot(walls[w].normal)) > std::cos(deg_to_rad(3.0)) &&
+              off_wall(walls[w], c) < 0.03 && over_wall(walls[w], c)) {
+            matched = true;
+            wall_plane[w] = true;
+          }
+        INFO("plane n " << plane.normal.transpose() << " d " << plane.distance << " lines "
+                        << plane.line_count << " rows " << plane.first_row << "-" << plane.last_row
+                        << " rms " << plane.rms);
+        CHECK(matched);
+      }
+      CHECK(floor_plane);
+      for (std::size_t w = 0; w < walls.size(); ++w) {
+        INFO("wall " << w << " with " << wall_lines[w] << " lines");
+        if (wall_lines[w] >= 10) CHECK(wall_plane[w]);
+      }
+      // Each line's plane index points to a reported plane or nowhere.
+      for (const auto& line : red.lines)
+        CHECK((line.plane == LineSegment<3, double>::npos || line.plane < red.planes.size()));
+    }
+    pose = sim::DifferentialDriveRobot::integrate(pose, 0.2, 0.0, scanner.params().scan_period);
+  }
+}
+
 TEST_CASE("an obstacle in the pitching scanner's blind zone is not forgotten while turning",
           "[egocentric][sim]") {
   // The robot drives toward a can (10 cm high) until it is 0.5 m away, as the virtual roadway
@@ -208,4 +341,38 @@ TEST_CASE("an obstacle in the pitching scanner's blind zone is not forgotten whi
   CHECK(blind > 0.6);     // the can at 0.5 m is inside it
   CHECK(run(blind) > 0);  // kept
   CHECK(run(0.0) == 0);   // the paper's rule forgets it
+}
+
+TEST_CASE("structure scans of consecutive sweeps feed 3-DOF scan matching unchanged (§6.1)",
+          "[egocentric][sim]") {
+  // The robot drives through the apartment at 0.3 m/s, turning gently, while the scanner nods;
+  // every sweep's structure map is a virtual 2D scan, and the paper's ICP (§6.3) run on two
+  // consecutive ones recovers the true motion between their base poses.
+  const sim::Scene scene = sim::apartment();
+  std::mt19937 rng(4);
+  const sim::PitchingScanner scanner(scanner_params());
+  SweepAssembler<double> sweeps(SweepParams<double>{scanner.params().sensor_offset});
+  Pose2d pose{1.2, 1.0, 0.6};
+  std::vector<std::pair<Pose2d, LaserScan<double>>> scans;
+  for (std::size_t k = 0; scans.size() < 3; ++k) {
+    REQUIRE(k < 600);
+    if (sweeps.push(scanner.scan(scene.world, pose, scanner.scan_time(k), rng), pose))
+      scans.emplace_back(sweeps.sweep().base_pose, structure_scan(sweeps.sweep()));
+    pose = sim::DifferentialDriveRobot::integrate(pose, 0.3, 0.1, scanner.params().scan_period);
+  }
+  for (std::size_t s = 1; s < scans.size(); ++s) {
+    const auto& [model_pose, model] = scans[s - 1];
+    const auto& [data_pose, data] = scans[s];
+    REQUIRE(model.valid_count() > 100);
+    const Pose2d truth = relative(model_pose, data_pose);
+    PaperIcp<2> icp;
+    const auto result = icp.align(KdTree<2, double>(model), data);
+    INFO("truth " << truth.x << " " << truth.y << " " << truth.theta);
+    CHECK(result.converged);
+    const Transform2d t = result.transform;
+    CHECK(t.translation().x() == Approx(truth.x).margin(0.02));
+    CHECK(t.translation().y() == Approx(truth.y).margin(0.02));
+    CHECK(std::atan2(t.linear()(1, 0), t.linear()(0, 0)) == Approx(truth.theta).margin(0.01));
+    CHECK(std::hypot(truth.x, truth.y) > 0.1);  // the sweeps are apart
+  }
 }

@@ -1,5 +1,7 @@
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <random>
@@ -236,6 +238,66 @@ TEST_CASE("age-out: a point transformed more than max_age times becomes a dummy"
   map.update(Pose2d{0.001, 0.0, 0.0}, one(2.0, 1.0));
   REQUIRE(map.valid_count() == 1);
   CHECK(map.bin(map.valid_indices()[0]).age == 0);
+}
+
+TEST_CASE("re-observing a surface refreshes its bin: points still seen never age out",
+          "[egocentric][virtual_map]") {
+  // A wall 3 m ahead, seen by a noisy scanner (sigma 5 mm, the SICK LMS 2xx) at every update while
+  // the robot creeps towards it. Keeping the nearer old point over a slightly farther new reading
+  // of the same surface would let the noise minimum of each bin survive, age up to max_age and be
+  // removed although the wall is still in view (§4.4.2 removes only points not seen again).
+  VirtualMapParams<double> params;
+  params.max_age = 20;
+  ObstacleMap<double> map(params);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.005);
+  double travelled = 0.0;
+  std::uint32_t oldest = 0;
+  for (int k = 0; k < 200; ++k) {
+    std::vector<Point3d> readings;
+    for (int j = -30; j <= 30; ++j) {
+      const double b = map.bin_bearing(map.bin_index(deg_to_rad(0.5 * j)));
+      const double d = (3.0 - travelled) / std::cos(b) + noise(rng);
+      readings.emplace_back(d * std::cos(b), d * std::sin(b), 0.5);
+    }
+    map.update(Pose2d{0.001, 0.0, 0.0}, readings);
+    travelled += 0.001;
+    for (int j = -30; j <= 30; ++j) {
+      const auto& b = map.bin(map.bin_index(deg_to_rad(0.5 * j)));
+      REQUIRE_FALSE(b.dummy);
+      oldest = std::max(oldest, b.age);
+    }
+  }
+  CHECK(oldest <= 3);
+  // A re-observation restarts the age but keeps the nearer point: the obstacle never creeps
+  // away from the robot, and a farther surface or a nearer obstacle are told apart.
+  ObstacleMap<double> obstacle;
+  CHECK(obstacle.insert(one(3.0, 0.0)) == 1);
+  obstacle.transform(Pose2d{0.001, 0.0, 0.0});
+  REQUIRE(obstacle.bin(obstacle.valid_indices()[0]).age == 1);
+  CHECK(obstacle.insert(one(3.02, 0.0)) == 0);  // the same surface, 2 cm farther: seen again
+  CHECK(obstacle.bin(obstacle.valid_indices()[0]).age == 0);
+  CHECK(obstacle.valid_points()[0].x() == Approx(2.999));
+  obstacle.transform(Pose2d{0.001, 0.0, 0.0});
+  CHECK(obstacle.insert(one(3.05, 0.0)) == 0);  // 5 cm behind it: another surface
+  CHECK(obstacle.bin(obstacle.valid_indices()[0]).age == 1);
+  CHECK(obstacle.insert(one(2.5, 0.0)) == 1);  // nearer: replaces
+  CHECK(obstacle.valid_points()[0].x() == 2.5);
+  StructureMap<double> structure;
+  CHECK(structure.insert(one(5.0, 0.0)) == 1);
+  structure.transform(Pose2d{-0.001, 0.0, 0.0});
+  CHECK(structure.insert(one(4.98, 0.0)) == 0);  // the same wall: seen again
+  CHECK(structure.bin(structure.valid_indices()[0]).age == 0);
+  structure.transform(Pose2d{-0.001, 0.0, 0.0});
+  CHECK(structure.insert(one(4.9, 0.0)) == 0);  // 10 cm nearer: an object in front of it
+  CHECK(structure.bin(structure.valid_indices()[0]).age == 1);
+  CHECK(structure.valid_points()[0].x() == Approx(5.002));
+  // With a zero tolerance nothing is refreshed.
+  ObstacleMap<double> strict(VirtualMapParams<double>{}, ObstacleMapPolicy{0.0, 1.0, 0.0});
+  strict.insert(one(3.0, 0.0));
+  strict.transform(Pose2d{0.001, 0.0, 0.0});
+  strict.insert(one(3.001, 0.0));
+  CHECK(strict.bin(strict.valid_indices()[0]).age == 1);
 }
 
 TEST_CASE("age-out spares the sensor's blind zone", "[egocentric][virtual_map]") {

@@ -74,6 +74,7 @@ Comparison compare(double opening, std::uint64_t seed) {
   MonteCarloLocalization<> mcl(OdometryMotionModel(motion), LikelihoodFieldModel(grid), mp);
   DoorAwareMclParams dp;
   dp.motion = motion;
+  dp.sampling = mp;
   DoorAwareMcl door_mcl(grid, doors, dp);
   std::mt19937_64 sim_rng(seed), rng_a(seed + 1), rng_b(seed + 1);
   mcl.initialize_gaussian(robot.pose(), {0.05, 0.05, 0.02}, 500, rng_a);
@@ -132,6 +133,36 @@ TEST_CASE("door mcl: partially open doors", "[localization][doors][sim]") {
   CHECK(c.door_max < 0.2);
 }
 
+TEST_CASE("door mcl: the particle count adapts to the pose uncertainty (KLD)",
+          "[localization][doors][sim]") {
+  const sim::Scene scene = sim::office_corridor();
+  const auto doors = corridor_doors(scene.world);
+  const OccupancyGrid grid = static_map(doors);
+  sim::LaserScannerParams lp;
+  lp.geometry = ScanGeometry<double>::from_fov(std::numbers::pi, deg_to_rad(1.0), 0.05, 30.0);
+  // The truth and the belief stay inside one KLD bin (0.5 m, 10 deg).
+  const Pose2d truth{5.2, 1.2, 0.05};
+  std::mt19937_64 sim_rng(3);
+  const auto scan = sim::LaserScanner2D(lp).scan(scene.world, truth, sim_rng);
+  DoorAwareMclParams dp;
+  dp.sampling.min_particles = 100;
+  dp.sampling.max_particles = 4000;
+  DoorAwareMcl mcl(grid, doors, dp);
+  DoorAwareObservation z;
+  mcl.prepare(scan, Pose2d{}, z);
+  std::mt19937_64 rng(5);
+  const OdometryReading still{truth, truth};
+  // A tight belief fills one bin: the set shrinks to the floor.
+  mcl.initialize_gaussian(truth, {0.02, 0.02, 0.01}, 4000, rng);
+  mcl.update(still, z, rng);
+  CHECK(mcl.particle_count() == 100);
+  // A uniform belief over the corridor and the offices (an observation without beams keeps it
+  // uniform) fills thousands of bins: the set stays at the ceiling.
+  mcl.initialize_uniform(grid, 4000, rng);
+  mcl.update(still, DoorAwareObservation{}, rng);
+  CHECK(mcl.particle_count() == 4000);
+}
+
 TEST_CASE("door mcl: bad arguments", "[localization][doors]") {
   const OccupancyGrid grid({0, 0}, 10, 10);
   const std::vector<DoorModel> too_many(17);
@@ -141,6 +172,10 @@ TEST_CASE("door mcl: bad arguments", "[localization][doors]") {
   p.sigma_d = -1;
   CHECK_THROWS_WITH(DoorAwareMcl(grid, {}, p),
                     "rangenav: DoorAwareMcl: argument 'sigma_d' = -1 must be finite and >= 0");
+  p = {};
+  p.sampling.min_particles = 0;
+  CHECK_THROWS_WITH(DoorAwareMcl(grid, {}, p),
+                    "rangenav: DoorAwareMcl: argument 'min_particles' = 0 must be >= 1");
   DoorAwareMcl mcl(grid, {});
   std::mt19937_64 rng(1);
   CHECK_THROWS_WITH(mcl.update(OdometryReading{}, DoorAwareObservation{}, rng),

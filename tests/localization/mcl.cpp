@@ -260,6 +260,29 @@ TEST_CASE("likelihood field: exact distance transform and end-point likelihoods"
   CHECK(at_truth == Approx(21 * field.log_likelihood_of_distance(0.0)).epsilon(1e-4));
   CHECK(field.log_likelihood(Pose2d{0.25, 1.05, 0}, z) < at_truth);
   CHECK(field.log_likelihood(Pose2d{0.05, 1.05, 0.2}, z) < at_truth);
+  // Beam selection: at most max_beams (default 30) evenly spaced from the first to the last.
+  const auto used = [](std::size_t n, std::size_t stride, std::size_t max_beams) {
+    LikelihoodFieldParams p;
+    p.beam_stride = stride;
+    p.max_beams = max_beams;
+    std::vector<std::size_t> ks;
+    for_each_used_beam(n, p, [&](std::size_t k) { ks.push_back(k); });
+    return ks;
+  };
+  const auto picks = used(181, 1, LikelihoodFieldParams{}.max_beams);
+  REQUIRE(picks.size() == 30);
+  CHECK(picks.front() == 0);
+  CHECK(picks.back() == 180);
+  for (std::size_t m = 1; m < picks.size(); ++m) {
+    CHECK(picks[m] - picks[m - 1] >= 6);  // 180 / 29 = 6.2
+    CHECK(picks[m] - picks[m - 1] <= 7);
+  }
+  CHECK(used(181, 2, 0).size() == 91);
+  CHECK(used(181, 2, 0).back() == 180);
+  CHECK(used(10, 1, 30).size() == 10);
+  CHECK(used(181, 4, 10) == std::vector<std::size_t>{0, 20, 40, 60, 80, 100, 120, 140, 160, 180});
+  CHECK(used(50, 1, 1) == std::vector<std::size_t>{0});
+  CHECK(used(0, 1, 30).empty());
   // The sensor's mount: the same scan taken 0.2 m behind the robot's centre.
   const auto z_mounted = field.prepare(scan, Pose2d{-0.2, 0, 0});
   CHECK(field.log_likelihood(Pose2d{0.25, 1.05, 0}, z_mounted) == Approx(at_truth));
@@ -278,6 +301,28 @@ TEST_CASE("mcl: tracking in the simulated office corridor stays within a few cm"
   CHECK(mean_err < 0.05);
   CHECK(max_err < 0.2);
   CHECK(mean(run.heading_errors) < 0.02);
+}
+
+TEST_CASE("mcl: tracks with closed doors that are missing from the map", "[localization][sim]") {
+  // Issue 8 / paper 001 §V.B: standard MCL with the doors removed from the map. Mapped with all
+  // doors open, then driven with all doors closed: every scan holds two short segments per
+  // doorway that the map cannot explain. The paper's standard MCL fluctuates between 0.05 and
+  // 0.22 m here. With all 181 beams treated as independent and sigma_hit = 0.1 m, the scan
+  // likelihood preferred poses that hide the doorways behind walls by tens of nats per scan,
+  // and the filter fell behind by metres (mean 5.1 m, max 11.4 m for this seed); the defaults
+  // (AMCL's: 30 beams, sigma_hit 0.2 m) keep it on the robot: mean 0.19 m, max 0.67 m here,
+  // means 0.16-0.29 m over seeds 2-6 (measured), slightly above the paper's band.
+  const OccupancyGrid grid =
+      corridor_map(sim::office_corridor(std::vector<double>(8, std::numbers::pi / 2)).world);
+  const sim::Scene closed = sim::office_corridor();
+  const Run run = drive(closed.world, grid, {1.0, 1.0, 0.0}, 18.5, Start::tracking, 500, 1);
+  REQUIRE(run.position_errors.size() > 100);
+  const double mean_err = mean(run.position_errors);
+  const double max_err = *std::max_element(run.position_errors.begin(), run.position_errors.end());
+  WARN("closed doors missing from the map: mean " << mean_err << " m, max " << max_err << " m");
+  CHECK(mean_err < 0.3);
+  CHECK(max_err < 1.0);
+  CHECK(mean(run.heading_errors) < 0.05);
 }
 
 TEST_CASE("mcl: deterministic for a seed", "[localization][sim]") {
@@ -342,27 +387,37 @@ namespace {
 
 struct RealRun {
   double mean_err{0}, max_err{0}, final_err{0};
+  double dead_reckoning_final_err{0};  ///< the raw odometry alone, from the same start
   std::size_t scans{0};
 };
 
-/// Standard MCL on a corrected CARMEN log: the grid comes from the corrected poses, the motion
-/// from the log's raw ODOM records, the start from the first corrected pose disturbed by
-/// (0.3 m, -0.2 m, 0.1 rad). Errors are against the corrected poses.
-RealRun track_real_log(const std::filesystem::path& path, std::size_t scan_stride,
-                       std::size_t beam_stride, std::size_t particles) {
+/// Standard MCL on a corrected CARMEN log: the grid comes from the corrected poses (a plain
+/// occupancy grid, classify_dynamic = false), the motion from the raw odometry, the start from
+/// the first corrected pose disturbed by (0.3 m, -0.2 m, 0.1 rad); default likelihood field.
+/// Errors are against the corrected poses.
+///
+/// The raw odometry: these GMapping-corrected logs follow every FLASER with an ODOM record whose
+/// logger timestamp is 0 and whose pose is the scan's corrected pose; the ODOM records after it
+/// continue from there. Taking the last ODOM pose before each scan therefore telescopes into the
+/// corrected trajectory (its dead reckoning ends 0.14 m from the truth on Intel, 0.016 m on
+/// FR079). The raw odometry chains the increments between consecutive ODOM records and skips
+/// the jumps into the timestamp-0 records (dead reckoning then ends 36.7 m / 45.6 m off).
+RealRun track_real_log(const std::filesystem::path& path, std::size_t particles) {
   io::CarmenReader reader(path, io::CarmenReaderOptions{.range_max = 81.0});
   std::vector<io::CarmenLaser> lasers;
-  std::vector<Pose2d> odometry;  // the last ODOM pose before each laser
-  Pose2d odom{};
-  bool have_odom = false;
+  std::vector<Pose2d> odometry;  // the raw odometry at each laser
+  Pose2d raw{}, last_record{};
+  bool have_record = false;
   while (auto record = reader.next()) {
     if (const auto* o = std::get_if<io::CarmenOdometry>(&*record)) {
-      odom = o->pose;
-      have_odom = true;
+      if (have_record && o->logger_timestamp != 0.0)
+        raw = compose(raw, relative(last_record, o->pose));
+      last_record = o->pose;
+      have_record = true;
     } else if (auto* l = std::get_if<io::CarmenLaser>(&*record)) {
-      if (!have_odom || !l->laser_pose) continue;
+      if (!have_record || !l->laser_pose) continue;
       lasers.push_back(std::move(*l));
-      odometry.push_back(odom);
+      odometry.push_back(raw);
     }
   }
   REQUIRE(lasers.size() > 100);
@@ -373,13 +428,12 @@ RealRun track_real_log(const std::filesystem::path& path, std::size_t scan_strid
   }
   OccupancyGridParams gp;
   gp.resolution = 0.1;
+  gp.classify_dynamic = false;
   OccupancyGrid grid = OccupancyGrid::covering(lo, hi, 15.0, gp);
   for (const auto& l : lasers)
     grid.integrate(*l.laser_pose, l.scan);
   LikelihoodFieldParams lp;
-  lp.sigma_hit = 0.05;
   lp.range_max = 81.0;
-  lp.beam_stride = beam_stride;
   MclParams mp;
   mp.min_particles = particles;
   mp.max_particles = particles;
@@ -395,14 +449,15 @@ RealRun track_real_log(const std::filesystem::path& path, std::size_t scan_strid
   LikelihoodFieldModel::Observation z;
   RealRun run;
   double sum = 0;
-  std::size_t prev = 0;
-  for (std::size_t i = 0; i < lasers.size(); i += scan_stride) {
+  Pose2d dead = first;
+  for (std::size_t i = 0; i < lasers.size(); ++i) {
+    const OdometryReading u{odometry[i == 0 ? 0 : i - 1], odometry[i]};
+    dead = compose(dead, relative(u.previous, u.current));
     mcl.sensor_model().prepare(lasers[i].scan, Pose2d{}, z);
-    mcl.update(OdometryReading{odometry[prev], odometry[i]}, z, rng);
-    prev = i;
+    mcl.update(u, z, rng);
     const Pose2d e = mcl.estimate();
     const double err = (e.position() - lasers[i].laser_pose->position()).norm();
-    if (i >= 20 * scan_stride) {  // after the start-up transient
+    if (i >= 20) {  // after the start-up transient
       sum += err;
       ++run.scans;
       run.max_err = std::max(run.max_err, err);
@@ -410,19 +465,36 @@ RealRun track_real_log(const std::filesystem::path& path, std::size_t scan_strid
     run.final_err = err;
   }
   run.mean_err = sum / static_cast<double>(run.scans);
+  run.dead_reckoning_final_err = (dead.position() - lasers.back().laser_pose->position()).norm();
   return run;
 }
 
 }  // namespace
 
 TEST_CASE("mcl: tracking on the corrected Intel log from raw odometry", "[localization][data]") {
-  {
-    const auto path = test::data_file_or_skip("carmen_corrected/intel-corrected.log.gz");
-    if (path.empty()) return;
-    const RealRun r = track_real_log(path, 1, 2, 1000);
-    WARN("intel: MCL vs corrected poses over " << r.scans << " scans: mean " << r.mean_err
-                                               << " m, max " << r.max_err << " m");
-    CHECK(r.mean_err < 0.15);
-    CHECK(r.final_err < 0.3);
-  }
+  const auto path = test::data_file_or_skip("carmen_corrected/intel-corrected.log.gz");
+  if (path.empty()) return;
+  const RealRun r = track_real_log(path, 1000);
+  WARN("intel: MCL vs corrected poses over "
+       << r.scans << " scans: mean " << r.mean_err << " m, max " << r.max_err << " m, final "
+       << r.final_err << " m; raw odometry alone ends " << r.dead_reckoning_final_err << " m off");
+  CHECK(r.dead_reckoning_final_err > 10.0);  // the odometry really is raw
+  CHECK(r.mean_err < 0.15);
+  CHECK(r.final_err < 0.3);
+}
+
+// FR079 (issue 8): slow (4791 scans of 360 beams), hidden; run with
+// `test_localization "[fr079]"`. GMapping stored each scan's pose from the filter as it was at
+// the time, so revisited areas disagree: around scans 1100-1225 a map of scans 1050-1250 alone
+// puts the scans' end points 0.04-0.10 m from its walls, the map of all scans 0.4-0.95 m. Even
+// fed with the corrected increments as odometry, MCL leaves the corrected poses there.
+TEST_CASE("mcl: tracking on the corrected FR079 log from raw odometry", "[.][fr079][data]") {
+  const auto path = test::data_file_or_skip("carmen_corrected/freiburg-079-corrected.log.gz");
+  if (path.empty()) return;
+  const RealRun r = track_real_log(path, 1000);
+  WARN("fr079: MCL vs corrected poses over "
+       << r.scans << " scans: mean " << r.mean_err << " m, max " << r.max_err << " m, final "
+       << r.final_err << " m; raw odometry alone ends " << r.dead_reckoning_final_err << " m off");
+  CHECK(r.dead_reckoning_final_err > 10.0);
+  CHECK(r.mean_err < 2.0);
 }

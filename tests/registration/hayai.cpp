@@ -9,6 +9,8 @@
 
 #include "rangenav/core/angles.hpp"
 #include "rangenav/registration/hayai.hpp"
+#include "rangenav/sim/sensors.hpp"
+#include "rangenav/sim/worlds.hpp"
 
 using namespace rangenav;
 
@@ -325,6 +327,33 @@ TEST_CASE("HAYAI reports failure instead of a wrong pose", "[registration][hayai
     two.min_matched_features = 2;
     CHECK(register_hayai(a, b, two).status == HayaiStatus::featureless);
   }
+  SECTION("two pairs are accepted only where the prediction confirms them") {
+    // A wall with a doorway: its two door frames are the only features (near ends of jumps).
+    const World doorway{
+        {{3.0, -100.0}, {3.0, -0.45}}, {{3.0, 0.45}, {3.0, 100.0}}, {{8.0, -100.0}, {8.0, 100.0}}};
+    const Pose2d shift{0.04, 0.01, deg_to_rad(0.5)};
+    const auto a = cast(doorway, {}, front_scan(361));
+    const auto b = cast(doorway, shift, front_scan(361));
+    REQUIRE(extract_hayai_features(a).size() == 2);
+    // Near the prediction, two pairs give the pose (exactly, up to the jump ends' half beam).
+    const auto near = register_hayai(a, b, {}, Pose2d{0.03, 0.0, 0.0});
+    REQUIRE(near.ok());
+    CHECK(near.matched == 2);
+    CHECK(near.shift.x == Approx(shift.x).margin(0.01));
+    CHECK(near.shift.y == Approx(shift.y).margin(0.01));
+    CHECK(near.shift.theta == Approx(shift.theta).margin(deg_to_rad(0.3)));
+    // Far from it (here 3.5° beyond the unverified rotation gate of 2°) nothing checks them:
+    // reported, no pose.
+    const auto far = register_hayai(a, b, {}, Pose2d{0.04, 0.0, deg_to_rad(4.0)});
+    CHECK(far.status == HayaiStatus::unconfirmed);
+    CHECK(far.matched == 2);
+    CHECK(far.shift == Pose2d{});
+    CHECK(to_string(far.status) == "unconfirmed");
+    // Requiring three pairs, as for every pose, turns two into too few.
+    HayaiParams<double> three;
+    three.min_matched_features = 3;
+    CHECK(register_hayai(a, b, three, Pose2d{0.03, 0.0, 0.0}).status == HayaiStatus::featureless);
+  }
   SECTION("two coincident features cannot fix the rotation") {
     std::vector<HayaiFeature<double>> m(2), d(2);
     for (auto* set : {&m, &d})
@@ -500,28 +529,127 @@ TEST_CASE("the tracker fuses odometry and falls back to it", "[registration][hay
     CHECK(lost.pose.x == Approx(odometry.x));
     CHECK(to_string(lost.source) == "none");
   }
-  SECTION("a HAYAI shift that contradicts the odometry is rejected by the gate") {
-    HayaiTracker<double> t;
+  SECTION("when HAYAI and the odometry disagree, redundancy decides") {
     const auto hex = hexagon_room();
-    t.track(cast(hex, {}, full_turn_scan(720)));
-    // The scans say the robot stood still; odometry claims 0.25 m (a slipping wheel). HAYAI
-    // still matches (the features are within the gate), but its shift is far outside the
-    // odometry's uncertainty.
+    // The scans say the robot stood still; odometry claims 0.25 m (a slipping wheel), far
+    // outside its uncertainty. HAYAI still matches (the features are within the gate), on six
+    // pairs that check each other: its shift is kept alone.
     const Pose2d slip{0.25, 0.0, 0.0};
+    HayaiTracker<double> t;
+    t.track(cast(hex, {}, full_turn_scan(720)));
     const auto r = t.track(cast(hex, {}, full_turn_scan(720)), slip);
     REQUIRE(r.match.ok());
+    CHECK(r.match.matched == 6);
     CHECK(r.match.shift.x == Approx(0.0).margin(1e-9));
     CHECK(r.innovation_rejected);
-    CHECK(r.source == HayaiIncrementSource::odometry);
-    CHECK(r.increment == slip);
-    // A generous gate lets HAYAI win instead.
+    CHECK(r.source == HayaiIncrementSource::hayai);
+    CHECK(r.increment == r.match.shift);
+    // With fewer pairs than trusted_matches the odometry wins the disagreement.
+    HayaiOdometryNoise<double> sceptical;
+    sceptical.trusted_matches = 7;
+    HayaiTracker<double> s({}, sceptical);
+    s.track(cast(hex, {}, full_turn_scan(720)));
+    const auto o = s.track(cast(hex, {}, full_turn_scan(720)), slip);
+    CHECK(o.innovation_rejected);
+    CHECK(o.source == HayaiIncrementSource::odometry);
+    CHECK(o.increment == slip);
+    // A generous gate fuses the two instead.
     HayaiOdometryNoise<double> loose;
     loose.innovation_gate = 1e6;
     HayaiTracker<double> trusting({}, loose);
     trusting.track(cast(hex, {}, full_turn_scan(720)));
     const auto trusted = trusting.track(cast(hex, {}, full_turn_scan(720)), slip);
+    CHECK_FALSE(trusted.innovation_rejected);
     CHECK(trusted.source == HayaiIncrementSource::fused);
     CHECK(std::abs(trusted.increment.x) < 0.03);  // odometry claimed 0.25
+  }
+}
+
+TEST_CASE("HAYAI in the simulator's office corridor", "[registration][hayai]") {
+  // Some office doors open: the scanner sees door frames (wall ends), the open leaves, the
+  // offices' corners through the doorways and the corridor's far end.
+  const auto scene = sim::office_corridor({1.2, 0.0, 0.9, 1.5, 0.6, 1.4, 0.0, 1.0});
+  sim::LaserScannerParams lms;
+  lms.geometry = ScanGeometry<double>::from_fov(pi, deg_to_rad(0.5), 0.05, 30.0);
+  lms.noise.sigma = 0.0;
+  const sim::LaserScanner2D exact(lms);
+  std::mt19937 rng(2005);
+  // The world's true corners: wall ends and the corners of the door leaves.
+  std::vector<Point2d> landmarks;
+  for (const auto& w : scene.world.walls()) {
+    landmarks.push_back(w.a);
+    landmarks.push_back(w.b);
+  }
+  for (const auto& d : scene.world.doors()) {
+    const auto leaf = d.leaf();
+    const Point2d u(std::cos(leaf.yaw), std::sin(leaf.yaw)), v(-u.y(), u.x());
+    for (const double a : {-0.5, 0.5})
+      for (const double b : {-0.5, 0.5})
+        landmarks.push_back(leaf.center + a * leaf.size.x() * u + b * leaf.size.y() * v);
+  }
+  const auto distance_to_landmark = [&landmarks](const Point2d& p) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& l : landmarks)
+      best = std::min(best, (l - p).norm());
+    return best;
+  };
+
+  SECTION("features lie at the world's corners and jump edges") {
+    std::size_t corners = 0, jumps = 0;
+    for (const Pose2d pose : {Pose2d{1.2, 1.0, 0.05}, Pose2d{4.0, 1.2, -0.1}, Pose2d{9.0, 0.8, 0.2},
+                              Pose2d{15.0, 1.0, 0.0}}) {
+      const auto features = extract_hayai_features(exact.scan(scene.world, pose, rng));
+      for (const auto& f : features) {
+        const Point2d world = pose.transform_point(f.position);
+        INFO("feature at " << world.transpose() << (f.jump_edge ? " (jump edge)" : " (corner)"));
+        // A jump edge lies within half a beam spacing (√3 σ of its quantisation) of the wall's
+        // end; a corner at the fitted lines' intersection, exact without noise.
+        CHECK(distance_to_landmark(world) < (f.jump_edge ? 2 * std::sqrt(3.0) * f.sigma : 0.01));
+        ++(f.jump_edge ? jumps : corners);
+      }
+    }
+    CHECK(corners >= 3);
+    CHECK(jumps >= 8);
+    // From x = 4 the door frames of the open north door n1 ahead are both found.
+    const Pose2d at{4.0, 1.0, 0.0};
+    const auto features = extract_hayai_features(exact.scan(scene.world, at, rng));
+    for (const Point2d& frame : {Point2d{7.05, 2.0}, Point2d{7.95, 2.0}}) {
+      const auto* f = nearest(features, in_frame(at, frame));
+      REQUIRE(f != nullptr);
+      CHECK(f->jump_edge);
+      CHECK(f->type == HayaiFeatureType::minimum);
+      CHECK((at.transform_point(f->position) - frame).norm() < 2 * std::sqrt(3.0) * f->sigma);
+    }
+  }
+  SECTION("a known shift is recovered from noise-free scans") {
+    const Pose2d from{1.2, 1.0, 0.05};
+    const Pose2d shift{0.06, -0.01, deg_to_rad(0.8)};
+    const auto r = register_hayai(exact.scan(scene.world, from, rng),
+                                  exact.scan(scene.world, compose(from, shift), rng));
+    REQUIRE(r.ok());
+    CHECK(r.matched >= 4);
+    CHECK(r.shift.x == Approx(shift.x).margin(0.005));
+    CHECK(r.shift.y == Approx(shift.y).margin(0.005));
+    CHECK(r.shift.theta == Approx(shift.theta).margin(deg_to_rad(0.1)));
+  }
+  SECTION("tracking at 3 m/s without odometry drifts a few per cent") {
+    // 4 cm per scan (75 Hz) weaving down the corridor from x = 1 to x = 9, 1 cm range noise.
+    lms.noise.sigma = 0.01;
+    const sim::LaserScanner2D noisy(lms);
+    const auto pose_at = [](double x) {
+      const double k = 2 * pi / 6.0;
+      return Pose2d{x, 1.0 + 0.25 * std::sin(k * x), std::atan(0.25 * k * std::cos(k * x))};
+    };
+    HayaiTracker<double> tracker({}, {}, pose_at(1.0));
+    std::size_t registered = 0, steps = 0;
+    for (double x = 1.0; x <= 9.0; x += 0.04, ++steps)
+      if (tracker.track(noisy.scan(scene.world, pose_at(x), rng)).match.ok()) ++registered;
+    const Pose2d truth = pose_at(1.0 + 0.04 * static_cast<double>(steps - 1));
+    INFO("drift " << position_error(tracker.pose(), truth) << " m over 8 m, " << registered
+                  << " of " << steps << " scans registered");
+    CHECK(position_error(tracker.pose(), truth) < 0.04 * 8.0);
+    CHECK(std::abs(angle_difference(tracker.pose().theta, truth.theta)) < deg_to_rad(10.0));
+    CHECK(registered >= steps * 9 / 10);
   }
 }
 

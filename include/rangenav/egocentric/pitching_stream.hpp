@@ -14,7 +14,7 @@
 //    since P_b (§6.1); a sweep is dropped when the pose shifts say the robot turns fast, and the
 //    next one starts after the turn.
 //  - structure_scan(): a sweep's structure map (§4.3) as a virtual 2D scan for 3-DOF SLAM (§6.1).
-//  - reduce_to_cluster_centroids(): the first per-scan reduction step of §6.1.
+//  The per-scan reduction steps of §6.1 are in egocentric/sweep_reduction.hpp.
 
 #include <algorithm>
 #include <cmath>
@@ -378,38 +378,6 @@ template <std::floating_point Scalar>
   StructureMap<Scalar> map(params);
   map.insert(sweep.cloud.points);
   return map.to_laser_scan();
-}
-
-/// §6.1 step 1: replaces every run of consecutive points (scan order) whose neighbours are closer
-/// than `max_gap` by the run's centroid; non-finite points break runs and are dropped. Appends to
-/// `out`; returns the number of centroids.
-template <int D, std::floating_point Scalar>
-std::size_t reduce_to_cluster_centroids(std::span<const Point<D, Scalar>> points, Scalar max_gap,
-                                        std::vector<Point<D, Scalar>>& out) {
-  detail::require_positive("reduce_to_cluster_centroids", "max_gap", max_gap);
-  const Scalar gap_sq = max_gap * max_gap;
-  const std::size_t before = out.size();
-  Point<D, Scalar> sum = Point<D, Scalar>::Zero();
-  std::size_t n = 0;
-  const Point<D, Scalar>* last = nullptr;
-  for (const auto& p : points) {
-    if (!p.allFinite()) {
-      if (n > 0) out.push_back(sum / static_cast<Scalar>(n));
-      n = 0;
-      last = nullptr;
-      continue;
-    }
-    if (last != nullptr && (p - *last).squaredNorm() >= gap_sq) {
-      out.push_back(sum / static_cast<Scalar>(n));
-      n = 0;
-    }
-    if (n == 0) sum.setZero();
-    sum += p;
-    ++n;
-    last = &p;
-  }
-  if (n > 0) out.push_back(sum / static_cast<Scalar>(n));
-  return out.size() - before;
 }
 
 }  // namespace rangenav

@@ -14,7 +14,8 @@
 //   1. transformation of every stored point by the pose shift (Eq. 4), keeping the polar
 //      coordinates in step; two points falling into one bin are resolved by the policy;
 //   2. removal of points transformed more than max_age times (§4.4.2);
-//   3. replacement of stored points by the new readings per the policy (§4.4.3).
+//   3. replacement of stored points by the new readings per the policy (§4.4.3); a reading of
+//      the surface already stored (within the policy's noise tolerance) restarts its age.
 // Steps 1 and 2 are skipped when the robot did not move. Steps 1-2 run in one pass into a second
 // bin buffer that is then swapped in, so an update allocates nothing.
 
@@ -114,7 +115,9 @@ struct VirtualMapPoint {
 /// A virtual-map policy decides which readings are admitted (`admits(range, z, max_range)`),
 /// which of two readings in one bin is kept (`prefers(candidate_range, kept_range)`: true when
 /// the candidate replaces the kept point) and the range of the dummy points of empty bins
-/// (`dummy_range(max_range)`).
+/// (`dummy_range(max_range)`). Optionally `refreshes(new_range, kept_range)` says whether a new
+/// reading the policy does not prefer is a re-observation of the stored point, which then keeps
+/// its coordinates but restarts its age (§4.4.2 removes only points not measured again).
 template <class P, class Scalar = double>
 concept VirtualMapPolicy = std::floating_point<Scalar> && requires(const P& policy, Scalar value) {
   { policy.admits(value, value, value) } -> std::convertible_to<bool>;
@@ -122,14 +125,33 @@ concept VirtualMapPolicy = std::floating_point<Scalar> && requires(const P& poli
   { policy.dummy_range(value) } -> std::convertible_to<Scalar>;
 };
 
+namespace detail {
+/// The policy's `refreshes` when it has one; without it nothing is a re-observation.
+template <class P, std::floating_point S>
+[[nodiscard]] bool policy_refreshes(const P& policy, S candidate, S kept) {
+  if constexpr (requires {
+                  { policy.refreshes(candidate, kept) } -> std::convertible_to<bool>;
+                })
+    return policy.refreshes(candidate, kept);
+  else
+    return false;
+}
+}  // namespace detail
+
 /// Obstacle map (§4.2): keeps the nearest reading per bearing, admitting only readings whose
 /// height lies in the virtual corridor [z_min, z_max], the robot's height band. A reading at
-/// equal distance replaces the stored one (§4.4.3: "less than or equal"), so the newest wins.
+/// equal or smaller distance replaces the stored one (§4.4.3: "less than or equal"). A reading
+/// at most refresh_tolerance (the sensor's range noise) farther is a re-observation of the
+/// same surface: the stored, nearer point stays but its age restarts, so a point still in view
+/// never ages out (§4.4.2 removes points *not* measured again) and the kept range never creeps
+/// away from the robot. A reading farther than that is another surface and is ignored.
 /// Floor points must be removed before insertion (egocentric/floor.hpp): with z_min = 0 the
 /// corridor itself admits artificial obstacles placed on the floor plane (descending stairs).
 struct ObstacleMapPolicy {
   double z_min{0.0};  ///< m, lower bound of the virtual corridor
   double z_max{1.0};  ///< m, upper bound of the virtual corridor (the robot's height)
+  /// m; about 6 sigma of the SICK LMS 2xx range noise (5 mm). 0: nothing refreshes.
+  double refresh_tolerance{0.03};
 
   template <std::floating_point S>
   [[nodiscard]] bool admits(S range, S z, S max_range) const {
@@ -140,6 +162,10 @@ struct ObstacleMapPolicy {
     return candidate <= kept;
   }
   template <std::floating_point S>
+  [[nodiscard]] bool refreshes(S candidate, S kept) const {
+    return candidate <= kept + static_cast<S>(refresh_tolerance);
+  }
+  template <std::floating_point S>
   [[nodiscard]] S dummy_range(S max_range) const {
     return max_range;
   }
@@ -147,8 +173,12 @@ struct ObstacleMapPolicy {
 
 /// Structure map (§4.3): keeps the farthest reading per bearing at any height, so objects that do
 /// not span the whole area of interest are overwritten by the walls behind them; max-range
-/// readings are ignored, as they would replace valid ones.
+/// readings are ignored, as they would replace valid ones. As in the obstacle map, a reading at
+/// most refresh_tolerance nearer than the stored one restarts its age.
 struct StructureMapPolicy {
+  /// m; 0: nothing refreshes.
+  double refresh_tolerance{0.03};
+
   template <std::floating_point S>
   [[nodiscard]] bool admits(S range, S /*z*/, S max_range) const {
     return range < max_range;
@@ -156,6 +186,10 @@ struct StructureMapPolicy {
   template <std::floating_point S>
   [[nodiscard]] bool prefers(S candidate, S kept) const {
     return candidate >= kept;
+  }
+  template <std::floating_point S>
+  [[nodiscard]] bool refreshes(S candidate, S kept) const {
+    return candidate >= kept - static_cast<S>(refresh_tolerance);
   }
   template <std::floating_point S>
   [[nodiscard]] S dummy_range(S /*max_range*/) const {
@@ -450,7 +484,10 @@ class VirtualMap {
     const std::size_t k = index_of((bearing - angle_min_) * inv_resolution_);
     if (k == bin_count_) return 0;
     bin_type& dst = bins_[k];
-    if (!dst.dummy && !policy.prefers(r, dst.range)) return 0;
+    if (!dst.dummy && !policy.prefers(r, dst.range)) {
+      if (detail::policy_refreshes(policy, r, dst.range)) dst.age = 0;  // seen again
+      return 0;
+    }
     dst = bin_type{x, y, z, r, bearing, 0, false};
     return 1;
   }

@@ -14,7 +14,8 @@
 //      door's angle; if none is found, a longer segment passing close to the hinge and running
 //      over the leaf's extent (a door flush with its wall) does. A linear Kalman filter fuses the
 //      measured angle;
-//   4. low-variance resampling.
+//   4. low-variance resampling, to the particle count KLD-sampling gives for the poses (as in
+//      MonteCarloLocalization: the count adapts to the pose uncertainty, §V.C).
 // Door angles are openings relative to DoorModel::reference_angle (0 .. opening_max observed).
 #include <Eigen/Core>
 #include <algorithm>
@@ -24,11 +25,13 @@
 #include <boost/geometry/geometries/point_xy.hpp>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <numbers>
 #include <random>
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "rangenav/core/angles.hpp"
@@ -36,6 +39,7 @@
 #include "rangenav/core/types.hpp"
 #include "rangenav/localization/free_space_sampling.hpp"
 #include "rangenav/localization/likelihood_field.hpp"
+#include "rangenav/localization/mcl.hpp"
 #include "rangenav/localization/odometry_motion_model.hpp"
 #include "rangenav/localization/particle_filter.hpp"
 #include "rangenav/mapping/doors.hpp"
@@ -70,7 +74,9 @@ struct DoorAwareMclParams {
   double length_tolerance{0.25};          ///< |segment length - leaf length| (m)
   double range_margin{deg_to_rad(15.0)};  ///< widening of the observed opening range
   double hinge_line_distance{0.08};       ///< fallback: segment line this close to the hinge
-  double resample_threshold{0.5};         ///< resample when N_eff < this * N
+  /// Particle count adaptation (KLD-sampling over the poses) and the resampling threshold,
+  /// the same as standard MCL's (§V.B compares both filters with the same parameters).
+  MclParams sampling{};
 
   void validate(std::string_view where) const {
     motion.validate(where);
@@ -83,9 +89,7 @@ struct DoorAwareMclParams {
     detail::require_positive(where, "length_tolerance", length_tolerance);
     detail::require_non_negative(where, "range_margin", range_margin);
     detail::require_positive(where, "hinge_line_distance", hinge_line_distance);
-    if (!(resample_threshold > 0 && resample_threshold <= 1))
-      detail::throw_invalid_argument(where, "resample_threshold", resample_threshold,
-                                     "must be in (0, 1]");
+    sampling.validate(where);
   }
 };
 
@@ -161,11 +165,11 @@ class DoorAwareMcl {
     out.end_points.clear();
     out.segments.clear();
     const auto& valid = scan.valid_indices();
-    for (std::size_t k = 0; k < valid.size(); k += params_.field.beam_stride) {
+    for_each_used_beam(valid.size(), params_.field, [&](std::size_t k) {
       const auto& q = scan.point(valid[k]);
       out.end_points.push_back(
           sensor_pose.transform_point(Point2d(double(q.x()), double(q.y()))).cast<float>());
-    }
+    });
     // Runs of neighbouring valid beams without a jump, each simplified by Douglas-Peucker.
     Line run, simple;
     const auto flush = [&] {
@@ -205,10 +209,19 @@ class DoorAwareMcl {
     filter_.update(weigher, z);
     for (auto& p : filter_.particles())
       update_doors(p.state, z);
-    if (filter_.effective_sample_size() <
-        params_.resample_threshold * static_cast<double>(filter_.size()))
-      filter_.resample(rng);
+    const std::size_t target =
+        params_.sampling.adapt_particle_count
+            ? kld_particle_count(
+                  filter_.particles(), [](const auto& p) -> const Pose2d& { return p.state.pose; },
+                  params_.sampling, bins_)
+            : filter_.size();
+    if (target != filter_.size() ||
+        filter_.effective_sample_size() <
+            params_.sampling.resample_threshold * static_cast<double>(filter_.size()))
+      filter_.resample(target, rng);
   }
+
+  [[nodiscard]] std::size_t particle_count() const { return filter_.size(); }
 
   /// Weighted mean pose.
   [[nodiscard]] Pose2d estimate() const {
@@ -350,6 +363,7 @@ class DoorAwareMcl {
   std::vector<DoorModel> doors_;
   ParticleFilter<DoorAwareState> filter_;
   std::vector<DoorAwareState> states_;
+  std::vector<std::pair<std::uint64_t, double>> bins_;  ///< scratch for the KLD count
 };
 
 }  // namespace rangenav

@@ -68,6 +68,39 @@ struct MclParams {
   return km1 / (2.0 * epsilon) * b * b * b;
 }
 
+/// KLD-sampling's particle count (clamped to [min_particles, max_particles]) for a weighted
+/// particle set whose poses `pose_of(particle)` returns; `bins` is scratch (reused).
+template <class State, class PoseOf>
+[[nodiscard]] std::size_t kld_particle_count(const std::vector<Particle<State>>& ps, PoseOf pose_of,
+                                             const MclParams& params,
+                                             std::vector<std::pair<std::uint64_t, double>>& bins) {
+  bins.clear();
+  const double inv_xy = 1.0 / params.bin_size_xy, inv_th = 1.0 / params.bin_size_theta;
+  for (const auto& p : ps) {
+    const Pose2d& x = pose_of(p);
+    const auto bx = static_cast<std::int64_t>(std::floor(x.x * inv_xy));
+    const auto by = static_cast<std::int64_t>(std::floor(x.y * inv_xy));
+    const auto bt = static_cast<std::int64_t>(std::floor(x.theta * inv_th));
+    const std::uint64_t key = (static_cast<std::uint64_t>(bx & 0x1FFFFF) << 42) |
+                              (static_cast<std::uint64_t>(by & 0x1FFFFF) << 21) |
+                              static_cast<std::uint64_t>(bt & 0x1FFFFF);
+    bins.emplace_back(key, p.weight);
+  }
+  std::sort(bins.begin(), bins.end());
+  const double one_particle = 1.0 / static_cast<double>(ps.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < bins.size();) {
+    double w = 0;
+    const std::uint64_t key = bins[i].first;
+    for (; i < bins.size() && bins[i].first == key; ++i)
+      w += bins[i].second;
+    if (w >= one_particle) ++k;
+  }
+  const double n = kld_particle_bound(k, params.kld_epsilon, params.kld_z);
+  return std::clamp(static_cast<std::size_t>(std::ceil(n)), params.min_particles,
+                    params.max_particles);
+}
+
 template <class Motion = OdometryMotionModel, class Sensor = LikelihoodFieldModel>
 class MonteCarloLocalization {
  public:
@@ -153,31 +186,9 @@ class MonteCarloLocalization {
 
   /// KLD-sampling's particle count for the current weighted set.
   [[nodiscard]] std::size_t kld_count() {
-    const auto& ps = filter_.particles();
-    bins_.clear();
-    const double inv_xy = 1.0 / params_.bin_size_xy, inv_th = 1.0 / params_.bin_size_theta;
-    for (const auto& p : ps) {
-      const auto bx = static_cast<std::int64_t>(std::floor(p.state.x * inv_xy));
-      const auto by = static_cast<std::int64_t>(std::floor(p.state.y * inv_xy));
-      const auto bt = static_cast<std::int64_t>(std::floor(p.state.theta * inv_th));
-      const std::uint64_t key = (static_cast<std::uint64_t>(bx & 0x1FFFFF) << 42) |
-                                (static_cast<std::uint64_t>(by & 0x1FFFFF) << 21) |
-                                static_cast<std::uint64_t>(bt & 0x1FFFFF);
-      bins_.emplace_back(key, p.weight);
-    }
-    std::sort(bins_.begin(), bins_.end());
-    const double one_particle = 1.0 / static_cast<double>(ps.size());
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < bins_.size();) {
-      double w = 0;
-      const std::uint64_t key = bins_[i].first;
-      for (; i < bins_.size() && bins_[i].first == key; ++i)
-        w += bins_[i].second;
-      if (w >= one_particle) ++k;
-    }
-    const double n = kld_particle_bound(k, params_.kld_epsilon, params_.kld_z);
-    return std::clamp(static_cast<std::size_t>(std::ceil(n)), params_.min_particles,
-                      params_.max_particles);
+    return kld_particle_count(
+        filter_.particles(), [](const auto& p) -> const Pose2d& { return p.state; }, params_,
+        bins_);
   }
 
  private:

@@ -36,9 +36,14 @@
 //     longest run of pairs whose order is the same in both scans is kept (the features' order
 //     cannot change fundamentally between consecutive scans); pairs whose residual after Eq. (5-6)
 //     exceeds max_pair_residual are dropped one by one and the pose is solved again;
-//   - the tracker (not in the paper): without odometry it predicts at constant velocity, retries
-//     turned hypotheses when that matches too few features, and coasts through scans it cannot
-//     register; with odometry it fuses the two increments in an EKF (HayaiOdometryNoise).
+//   - two pairs suffice for a pose (a corridor often shows only two door frames), but nothing
+//     checks them: such a pose must agree with the prediction (odometry or constant velocity)
+//     within gates, else it is reported as `unconfirmed`;
+//   - the tracker (not in the paper): it predicts with the odometry increment (constant velocity
+//     without it), retries turned hypotheses when that matches too few features, and falls back
+//     on the prediction through scans it cannot register; with odometry it fuses the two
+//     increments in an EKF (HayaiOdometryNoise) and, where they disagree, keeps HAYAI's only when
+//     redundant pairs checked it.
 //
 // Thread safety: the free functions are reentrant; a HayaiFeatureExtractor, HayaiMatcher or
 // HayaiTracker object must not be used by two threads at once (each keeps scratch buffers, so the
@@ -159,12 +164,22 @@ struct HayaiParams {
   /// Pairs farther apart than this after the closed-form pose are dropped, and the pose is solved
   /// again (m).
   Scalar max_pair_residual{Scalar(0.1)};
-  /// Fewest matched features for a pose (two determine it; three let one be checked).
-  std::size_t min_matched_features{3};
-  /// When the tracker's constant-velocity prediction (no odometry) matches too few features, it
-  /// retries with the predicted
-  /// heading turned by ±step, ±2·step, ... up to ±max (rad; 0 disables), for turns faster than
-  /// predicted (not in the paper, whose 75 Hz scans turn little between scans).
+  /// Fewest matched features for a pose (two determine it).
+  std::size_t min_matched_features{2};
+  /// A pose resting on fewer pairs than this has no redundant pair to check it (two pairs fit
+  /// any rigid motion that keeps their distance): it is accepted only when it lies within
+  /// unverified_rotation_gate and unverified_translation_gate (plus three standard deviations
+  /// of its own translation) of the prediction (odometry, or the tracker's constant-velocity
+  /// motion), and reported as `unconfirmed` otherwise. A feature-poor scene (a corridor with
+  /// two door frames in view) needs such poses.
+  std::size_t verified_matches{3};
+  Scalar unverified_translation_gate{Scalar(0.05)};        ///< (m)
+  Scalar unverified_rotation_gate{deg_to_rad(Scalar(2))};  ///< (rad)
+  /// When the tracker's prediction (odometry, or constant velocity without it) matches too few
+  /// features, it retries with the predicted heading turned by ±step, ±2·step, ... up to ±max
+  /// (rad; 0 disables) and keeps the verified pose with the most pairs: for turns faster than
+  /// predicted, and odometry that misses part of a turn (not in the paper, whose 75 Hz scans turn
+  /// little between scans).
   Scalar recovery_rotation_max{deg_to_rad(Scalar(12))};
   Scalar recovery_rotation_step{deg_to_rad(Scalar(3))};
   /// Without odometry, a scan HAYAI cannot register moves the pose by the constant-velocity
@@ -201,6 +216,8 @@ struct HayaiParams {
     if (min_matched_features < 2)
       detail::throw_invalid_argument(where, "min_matched_features", min_matched_features,
                                      "must be >= 2");
+    detail::require_non_negative(where, "unverified_translation_gate", unverified_translation_gate);
+    detail::require_non_negative(where, "unverified_rotation_gate", unverified_rotation_gate);
     detail::require_positive(where, "min_feature_sigma", min_feature_sigma);
     detail::require_positive(where, "max_feature_sigma", max_feature_sigma);
     detail::require_non_negative(where, "recovery_rotation_max", recovery_rotation_max);
@@ -213,7 +230,8 @@ enum class HayaiStatus : std::uint8_t {
   success,          ///< Δp computed from enough uniquely matched features
   featureless,      ///< the reference or the current scan has fewer features than needed
   too_few_matches,  ///< fewer than min_matched_features pairs survived matching and checks
-  degenerate        ///< the matched features are (nearly) coincident: rotation undetermined
+  degenerate,       ///< the matched features are (nearly) coincident: rotation undetermined
+  unconfirmed  ///< fewer than verified_matches pairs, and their pose disagrees with the prediction
 };
 
 [[nodiscard]] constexpr std::string_view to_string(HayaiStatus status) {
@@ -226,6 +244,8 @@ enum class HayaiStatus : std::uint8_t {
       return "too_few_matches";
     case HayaiStatus::degenerate:
       return "degenerate";
+    case HayaiStatus::unconfirmed:
+      return "unconfirmed";
   }
   return "unknown";
 }
@@ -658,10 +678,27 @@ class HayaiMatcher {
       if (worst_sq <= params_.max_pair_residual * params_.max_pair_residual) break;
       pairs.erase(pairs.begin() + static_cast<std::ptrdiff_t>(worst));
     }
-    result.status = HayaiStatus::success;
-    result.shift = shift;
     result.matched = pairs.size();
+    result.shift = shift;
     fill_covariance(model, data, pairs, result);
+    if (pairs.size() < params_.verified_matches) {
+      // Unchecked pairs: the pose must agree with the prediction, within the gates plus three
+      // standard deviations of its translation (jump edges seen at a grazing angle slide along
+      // their wall by up to a beam spacing; two close features leave the rotation loose).
+      const Scalar sigma_t = std::sqrt(std::max(
+          result.covariance.template topLeftCorner<2, 2>().trace() / Scalar(2), Scalar(0)));
+      const Scalar gate_t = params_.unverified_translation_gate + Scalar(3) * sigma_t;
+      if (std::hypot(shift.x - predicted.x, shift.y - predicted.y) > gate_t ||
+          std::abs(angle_difference(shift.theta, predicted.theta)) >
+              params_.unverified_rotation_gate) {
+        result.status = HayaiStatus::unconfirmed;
+        result.shift = {};
+        result.covariance.setZero();
+        result.rms_residual = 0;
+        return result;
+      }
+    }
+    result.status = HayaiStatus::success;
     return result;
   }
 
@@ -799,15 +836,21 @@ template <std::floating_point Scalar>
 /// the EKF of [6] without its constants, these are ours).
 template <std::floating_point Scalar = double>
 struct HayaiOdometryNoise {
-  Scalar translation_per_metre{Scalar(0.05)};        ///< σ_xy per metre driven (m/m)
-  Scalar translation_per_radian{Scalar(0.02)};       ///< σ_xy per radian turned (m/rad)
-  Scalar rotation_per_radian{Scalar(0.05)};          ///< σ_θ per radian turned (rad/rad)
+  Scalar translation_per_metre{Scalar(0.05)};   ///< σ_xy per metre driven (m/m)
+  Scalar translation_per_radian{Scalar(0.02)};  ///< σ_xy per radian turned (m/rad)
+  /// σ_θ per radian turned (rad/rad): the MIT CSAIL log's odometry misses about 12 % of its
+  /// turns against scan matching.
+  Scalar rotation_per_radian{Scalar(0.15)};
   Scalar rotation_per_metre{deg_to_rad(Scalar(2))};  ///< σ_θ per metre driven (rad/m)
   Scalar translation_floor{Scalar(0.005)};           ///< σ_xy of any increment (m)
   Scalar rotation_floor{deg_to_rad(Scalar(0.25))};   ///< σ_θ of any increment (rad)
-  /// HAYAI's increment is rejected (odometry kept) when its Mahalanobis distance² from the
-  /// odometry increment exceeds this (χ² with 3 degrees of freedom, 99.9 %).
+  /// HAYAI's increment and the odometry's disagree when the Mahalanobis distance² between them
+  /// exceeds this (χ² with 3 degrees of freedom, 99.9 %); they are then not fused.
   Scalar innovation_gate{Scalar(16.27)};
+  /// On such a disagreement HAYAI's increment is kept alone when it rests on at least this many
+  /// pairs (a registration checked by redundant pairs: the odometry slipped or lagged), and the
+  /// odometry's increment otherwise (HAYAI found a wrong match). 0: odometry always wins.
+  std::size_t trusted_matches{4};
 
   void validate(std::string_view where = "HayaiOdometryNoise") const {
     detail::require_non_negative(where, "translation_per_metre", translation_per_metre);
@@ -918,6 +961,19 @@ class HayaiTracker {
   }
 
  private:
+  // Covariance of p ⊕ u (Eq. 3) from the covariances of p and u, through the Jacobians. (The
+  // paper's clockwise θ makes its matrix in Eq. (3) R(-θ_n); here θ is counter-clockwise.)
+  [[nodiscard]] static Matrix3 compose_covariance(const Pose2<Scalar>& p, const Matrix3& p_cov,
+                                                  const Pose2<Scalar>& u, const Matrix3& u_cov) {
+    const Scalar c = std::cos(p.theta), s = std::sin(p.theta);
+    Matrix3 jp = Matrix3::Identity();
+    jp(0, 2) = -s * u.x - c * u.y;
+    jp(1, 2) = c * u.x - s * u.y;
+    Matrix3 ju = Matrix3::Identity();
+    ju.template topLeftCorner<2, 2>() << c, -s, s, c;
+    return jp * p_cov * jp.transpose() + ju * u_cov * ju.transpose();
+  }
+
   HayaiTrackResult<Scalar> step(const LaserScan<Scalar>& scan,
                                 const std::optional<Pose2<Scalar>>& odometry) {
     HayaiTrackResult<Scalar> result;
@@ -929,27 +985,27 @@ class HayaiTracker {
       result.pose = pose_;
       return result;
     }
-    // Without odometry the motion is predicted at constant velocity.
+    // The motion since the previous scan is predicted by the odometry, or at constant velocity
+    // without it; the prediction guides the matching, confirms two-pair poses and is retried
+    // turned when it misses.
     const Pose2<Scalar> predicted = odometry ? *odometry : velocity_;
+    const Matrix3 predicted_covariance = noise_.covariance(predicted);
     const bool full_turn = covers_full_turn(scan);
     result.match = matcher_.register_features(reference_, current_, predicted, full_turn, pairs_);
-    if (!odometry && !result.match.ok() && result.match.status != HayaiStatus::featureless)
+    if (!result.match.ok() && result.match.status != HayaiStatus::featureless)
       recover(predicted, full_turn, result.match);
-    Matrix3 increment_cov = Matrix3::Zero();
-    if (result.match.ok() && odometry) {
-      fuse(*odometry, result, increment_cov);
-    } else if (result.match.ok()) {
+    Matrix3 increment_covariance = predicted_covariance;
+    if (result.match.ok()) {
       result.source = HayaiIncrementSource::hayai;
       result.increment = result.match.shift;
-      increment_cov = result.match.covariance;
+      increment_covariance = result.match.covariance;
+      if (odometry) fuse(*odometry, predicted_covariance, result, increment_covariance);
     } else if (odometry) {
       result.source = HayaiIncrementSource::odometry;
       result.increment = *odometry;
-      increment_cov = noise_.covariance(*odometry);
     } else if (matcher_.params().coast_on_failure) {
       result.source = HayaiIncrementSource::constant_velocity;
       result.increment = velocity_;
-      increment_cov = noise_.covariance(velocity_);
     } else {
       // Nothing to move by: the pose stays, the failure is reported, and the scan becomes the
       // reference all the same (step 5; an older reference would only drift further away).
@@ -958,15 +1014,8 @@ class HayaiTracker {
       std::swap(reference_, current_);
       return result;
     }
-    // Eq. (3): p_{n+1} = p_n ⊕ Δp (the paper's clockwise θ makes its matrix R(-θ_n)), with the
-    // covariance propagated through the composition's Jacobians.
-    const Scalar c = std::cos(pose_.theta), s = std::sin(pose_.theta);
-    Matrix3 jp = Matrix3::Identity();
-    jp(0, 2) = -s * result.increment.x - c * result.increment.y;
-    jp(1, 2) = c * result.increment.x - s * result.increment.y;
-    Matrix3 ju = Matrix3::Identity();
-    ju.template topLeftCorner<2, 2>() << c, -s, s, c;
-    covariance_ = jp * covariance_ * jp.transpose() + ju * increment_cov * ju.transpose();
+    // Eq. (3): p_{n+1} = p_n ⊕ Δp, with the covariance propagated.
+    covariance_ = compose_covariance(pose_, covariance_, result.increment, increment_covariance);
     pose_ = compose(pose_, result.increment);
     result.pose = pose_;
     velocity_ = result.increment;
@@ -986,8 +1035,10 @@ class HayaiTracker {
         hypothesis.theta = normalize_angle(predicted.theta + sign * turn);
         const auto r =
             matcher_.register_features(reference_, current_, hypothesis, full_turn, scratch_pairs_);
-        if (r.ok() && (!best.ok() || r.matched > best.matched ||
-                       (r.matched == best.matched && r.rms_residual < best.rms_residual))) {
+        // A turned hypothesis is no prediction to confirm two pairs by: only verified poses.
+        if (r.ok() && r.matched >= matcher_.params().verified_matches &&
+            (!best.ok() || r.matched > best.matched ||
+             (r.matched == best.matched && r.rms_residual < best.rms_residual))) {
           best = r;
           std::swap(pairs_, scratch_pairs_);
         }
@@ -996,19 +1047,22 @@ class HayaiTracker {
   }
 
   // EKF on the increment: the prediction is the odometry increment u with covariance Q, the
-  // measurement HAYAI's Δp with covariance R; x = u + K (Δp − u), K = Q (Q + R)⁻¹.
-  void fuse(const Pose2<Scalar>& u, HayaiTrackResult<Scalar>& result, Matrix3& cov) const {
-    const Matrix3 q = noise_.covariance(u);
-    const Matrix3 s = q + result.match.covariance;
-    const Eigen::Matrix<Scalar, 3, 1> innovation(
-        result.match.shift.x - u.x, result.match.shift.y - u.y,
-        angle_difference(result.match.shift.theta, u.theta));
-    const Matrix3 s_inv = s.inverse();
+  // measurement HAYAI's Δp with covariance R; x = u + K (Δp − u), K = Q (Q + R)⁻¹. On entry
+  // result.increment / cov hold Δp and R, on return the increment to apply and its covariance.
+  void fuse(const Pose2<Scalar>& u, const Matrix3& q, HayaiTrackResult<Scalar>& result,
+            Matrix3& cov) const {
+    const Pose2<Scalar>& shift = result.increment;
+    const Matrix3 s_inv = (q + cov).inverse();
+    const Eigen::Matrix<Scalar, 3, 1> innovation(shift.x - u.x, shift.y - u.y,
+                                                 angle_difference(shift.theta, u.theta));
     if (innovation.dot(s_inv * innovation) > noise_.innovation_gate) {
-      result.source = HayaiIncrementSource::odometry;
+      // They disagree: HAYAI's Δp stands alone when redundant pairs checked it, else odometry.
       result.innovation_rejected = true;
-      result.increment = u;
-      cov = q;
+      if (noise_.trusted_matches == 0 || result.match.matched < noise_.trusted_matches) {
+        result.source = HayaiIncrementSource::odometry;
+        result.increment = u;
+        cov = q;
+      }
       return;
     }
     const Matrix3 k = q * s_inv;
