@@ -12,9 +12,14 @@
 #include <vector>
 
 #include "rangenav/io/carmen.hpp"
+#include "rangenav/io/mrpt_pose.hpp"
 #include "rangenav/io/trajectory.hpp"
 #include "scratch_dir.hpp"
 #include "test_support.hpp"
+
+#ifdef RANGENAV_HAVE_ZLIB
+#include <zlib.h>
+#endif
 
 using namespace rangenav;
 using namespace rangenav::io;
@@ -246,4 +251,115 @@ TEST_CASE("the MIT CSAIL log's poses survive an xytheta round trip", "[io][traje
     CHECK(read[i].pose.theta == Approx(trajectory[i].pose.theta).margin(1e-15));
   }
   CHECK(read.back().timestamp == 1134865053.892206);
+}
+
+// ---- MRPT pose files (io/mrpt_pose.hpp) -----------------------------------------------------
+
+namespace {
+
+// The 64 bytes of an MRPT pose file: the 4x4 matrix column-major as little-endian float32.
+std::string mrpt_pose_bytes(const Eigen::Matrix4d& m) {
+  std::string bytes;
+  for (int col = 0; col < 4; ++col)
+    for (int row = 0; row < 4; ++row)
+      io::detail::append_le(bytes, static_cast<float>(m(row, col)));
+  return bytes;
+}
+
+}  // namespace
+
+TEST_CASE("read_mrpt_pose reads the pbmap demo's gzip-compressed camera poses",
+          "[io][mrpt_pose][data]") {
+#ifdef RANGENAV_HAVE_ZLIB
+  const auto pose0 = test::data_file_or_skip("mrpt_pbmap/pose0.mat");
+  const auto pose3 = test::data_file_or_skip("mrpt_pbmap/pose3.mat");
+#else
+  std::cout << "[rangenav-skip] built without zlib, cannot read mrpt_pbmap/pose0.mat\n";
+  const std::filesystem::path pose0, pose3;
+#endif
+  if (pose0.empty() || pose3.empty()) return;
+  // Translations as listed in ../shared/data/PROVENANCE.md.
+  const Transform3d t0 = read_mrpt_pose(pose0);
+  CHECK(t0.translation().isApprox(Eigen::Vector3d(-0.2176, -0.2287, 0.9001), 1e-3));
+  const Transform3d t3 = read_mrpt_pose(pose3);
+  CHECK(t3.translation().isApprox(Eigen::Vector3d(-0.2556, -0.6393, 1.5184), 1e-3));
+  for (const auto& t : {t0, t3}) {
+    const Eigen::Matrix3d r = t.linear();
+    CHECK((r.transpose() * r).isApprox(Eigen::Matrix3d::Identity(), 1e-12));
+    CHECK(r.determinant() == Approx(1));
+  }
+  // Column-major: the file's second float is R(1, 0), not R(0, 1).
+  CHECK(t0.linear()(1, 0) == Approx(-0.039822936).margin(1e-6));
+  CHECK(t0.linear()(0, 1) == Approx(-0.01463264).margin(1e-6));
+  // The camera looks down its z axis, which points roughly along the world's -z here.
+  CHECK(t0.linear()(2, 2) == Approx(-0.9712442).margin(1e-6));
+}
+
+TEST_CASE("read_mrpt_pose round-trips plain and gzip files", "[io][mrpt_pose]") {
+  std::mt19937 engine(7);
+  TempDir dir;
+  for (int k = 0; k < 5; ++k) {
+    const Transform3d truth = random_transform(engine);
+    const std::string bytes = mrpt_pose_bytes(truth.matrix());
+    const auto plain = dir.write("plain.mat", bytes);
+    const Transform3d read = read_mrpt_pose(plain);
+    CHECK(read.linear().isApprox(truth.linear(), 1e-6));
+    CHECK(read.translation().isApprox(truth.translation(), 1e-6));
+#ifdef RANGENAV_HAVE_ZLIB
+    const auto gz_path = dir.path() / "pose.mat";
+    gzFile gz = gzopen(gz_path.c_str(), "wb9");
+    REQUIRE(gz != nullptr);
+    REQUIRE(gzwrite(gz, bytes.data(), static_cast<unsigned>(bytes.size())) == 64);
+    gzclose(gz);
+    CHECK(read_mrpt_pose(gz_path).isApprox(read, 1e-15));
+#endif
+  }
+}
+
+TEST_CASE("read_mrpt_pose rejects bad files with the file's name", "[io][mrpt_pose]") {
+  TempDir dir;
+  const auto message = [&](const std::string& name, const std::string& bytes) {
+    const auto path = dir.write(name, bytes);
+    return message_of([&] { return read_mrpt_pose(path); });
+  };
+  const std::string good = mrpt_pose_bytes(Eigen::Matrix4d::Identity());
+  const std::string prefix = "rangenav: MRPT pose: " + (dir.path() / "").string();
+  CHECK(message("short.mat", good.substr(0, 60)) ==
+        prefix + "short.mat: expected 64 bytes (16 float32, a 4x4 matrix), got 60");
+  CHECK(message("long.mat", good + "1234") ==
+        prefix + "long.mat: expected 64 bytes (16 float32, a 4x4 matrix), got more");
+  CHECK(message("empty.mat", "") ==
+        prefix + "empty.mat: expected 64 bytes (16 float32, a 4x4 matrix), got 0");
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m(3, 0) = 0.5;
+  CHECK(message("row.mat", mrpt_pose_bytes(m)) ==
+        prefix + "row.mat: last row is not (0, 0, 0, 1): not a rigid transform");
+  m = 2 * Eigen::Matrix4d::Identity();
+  m(3, 3) = 1;
+  CHECK(message("scaled.mat", mrpt_pose_bytes(m)) ==
+        prefix + "scaled.mat: rotation is not orthonormal: not a rigid transform");
+  m = Eigen::Matrix4d::Identity();
+  m(0, 3) = std::numeric_limits<double>::quiet_NaN();
+  CHECK(message("nan.mat", mrpt_pose_bytes(m)) == prefix + "nan.mat: non-finite matrix element");
+  CHECK(message_of([&] { return read_mrpt_pose(dir.path() / "missing.mat"); }) ==
+        prefix + "missing.mat: cannot open file for reading");
+#ifdef RANGENAV_HAVE_ZLIB
+  const auto gz_path = dir.path() / "full.mat";
+  gzFile gz = gzopen(gz_path.c_str(), "wb9");
+  REQUIRE(gz != nullptr);
+  REQUIRE(gzwrite(gz, good.data(), static_cast<unsigned>(good.size())) == 64);
+  gzclose(gz);
+  const std::string compressed = read_text(gz_path);
+  CHECK(message("truncated.mat", compressed.substr(0, compressed.size() / 2)) ==
+        prefix + "truncated.mat: gzip: truncated compressed data");
+  std::string corrupt = compressed;
+  corrupt[12] = static_cast<char>(corrupt[12] ^ 0x55);
+  corrupt[13] = static_cast<char>(corrupt[13] ^ 0x55);
+  CHECK_THROWS_AS(read_mrpt_pose(dir.write("corrupt.mat", corrupt)), io_error);
+#else
+  CHECK(message("gz.mat", std::string("\x1f\x8b\x08\x00", 4)) ==
+        prefix +
+            "gz.mat: gzip-compressed file, but rangenav was built without zlib "
+            "(RANGENAV_HAVE_ZLIB)");
+#endif
 }

@@ -37,6 +37,7 @@
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/point_cloud.hpp"
 #include "rangenav/core/types.hpp"
+#include "rangenav/geometry/integer_grid.hpp"
 
 namespace rangenav {
 
@@ -105,24 +106,11 @@ class VoronoiPathGraph {
     const std::size_t n = traits::size(cloud);
     if (n == 0) detail::throw_invalid(where, "argument 'cloud' is empty");
     stats_.input_points = n;
-    constexpr double grid_limit = double(std::numeric_limits<std::int32_t>::max() / 2);
+    const IntegerGrid snapper{params_.resolution};
     std::vector<std::array<std::int32_t, 2>> grid(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      const Point2d p = traits::point(cloud, i).template cast<double>();
-      if (!p.allFinite())
-        detail::throw_invalid_argument(
-            where, "cloud[" + std::to_string(i) + "]",
-            detail::format_value(p.x()) + " " + detail::format_value(p.y()), "must be finite");
-      const double gx = std::round(p.x() / params_.resolution);
-      const double gy = std::round(p.y() / params_.resolution);
-      if (std::abs(gx) > grid_limit || std::abs(gy) > grid_limit)
-        detail::throw_invalid_argument(
-            where, "cloud[" + std::to_string(i) + "]",
-            detail::format_value(p.x()) + " " + detail::format_value(p.y()),
-            "does not fit the 32-bit grid at resolution " +
-                detail::format_value(params_.resolution));
-      grid[i] = {static_cast<std::int32_t>(gx), static_cast<std::int32_t>(gy)};
-    }
+    for (std::size_t i = 0; i < n; ++i)
+      grid[i] = snapper.snap(traits::point(cloud, i).template cast<double>(), where,
+                             "cloud[" + std::to_string(i) + "]");
     std::sort(grid.begin(), grid.end());
     grid.erase(std::unique(grid.begin(), grid.end()), grid.end());
     build(grid);

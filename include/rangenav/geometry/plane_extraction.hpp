@@ -1,0 +1,291 @@
+#pragma once
+// Iterative RANSAC plane extraction per cluster (paper 004 §3.3): fit a plane to the cluster with
+// RANSAC; if it has at least `min_inliers` inliers it is kept and its inliers are removed from the
+// cluster, and the fitting is repeated "as long as no new plane can be fitted or the cluster size
+// falls below a user defined threshold". An optional orientation constraint admits only planes
+// whose normal lies within an angle of an axis (e.g. only horizontal planes: normal near z).
+//
+// Every accepted plane is refitted by least squares on its inliers (the normal is the smallest
+// principal axis of their covariance, Eigen's SelfAdjointEigenSolver) and its inliers are
+// collected again against the refitted plane. The inliers are projected onto the plane (Eq. 1-3:
+// delta = n . (p - a), p_pr = p - delta n; PlaneFrame::to_plane gives p_pr in the plane's frame)
+// and their concave hull is built with alpha shapes (concave_hull.hpp).
+//
+// Beyond the paper: a RANSAC plane's inliers may fall into several pieces (coplanar surfaces that
+// do not touch, or thin strips where the band of the plane crosses other surfaces). Only the
+// largest connected piece of the alpha shape is taken as the surface and refitted; the other
+// inliers stay in the cluster, so a second coplanar surface becomes a plane of its own and a
+// strip of a wall cannot tilt a table top in the least-squares refit.
+//
+// Randomness comes from the caller's engine: with the same engine state the result is identical.
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <numbers>
+#include <optional>
+#include <random>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rangenav/core/error.hpp"
+#include "rangenav/core/types.hpp"
+#include "rangenav/geometry/concave_hull.hpp"
+#include "rangenav/geometry/planar_polygon.hpp"
+
+namespace rangenav {
+
+struct PlaneExtractionParams {
+  /// RANSAC inlier band: |delta| of Eq. (2) below this (m).
+  double distance_threshold = 0.02;
+  /// A plane needs at least this many inliers to be accepted.
+  std::size_t min_inliers = 500;
+  /// Stop fitting in a cluster once fewer points than this remain (the paper's user-defined
+  /// threshold); 0 = min_inliers.
+  std::size_t min_remaining = 0;
+  /// RANSAC hypotheses per plane at most.
+  int max_iterations = 200;
+  /// Stop sampling when a better plane would have been found with this probability.
+  double confidence = 0.99;
+  /// Orientation constraint: when set, only planes whose normal is within `max_axis_angle` of
+  /// this axis (either sign) are accepted, e.g. (0, 0, 1) for horizontal planes.
+  std::optional<Point3d> axis;
+  double max_axis_angle = 10.0 * std::numbers::pi / 180.0;  ///< rad
+  /// When set, normals are flipped to face this point (e.g. the sensor position).
+  std::optional<Point3d> viewpoint;
+  /// Alpha-shape hull of the projected inliers.
+  ConcaveHullParams hull{};
+
+  void validate(std::string_view where) const {
+    detail::require_positive(where, "params.distance_threshold", distance_threshold);
+    if (min_inliers < 3)
+      detail::throw_invalid_argument(where, "params.min_inliers", min_inliers, "must be >= 3");
+    if (max_iterations < 1)
+      detail::throw_invalid_argument(where, "params.max_iterations", max_iterations,
+                                     "must be >= 1");
+    if (!(confidence > 0 && confidence < 1))
+      detail::throw_invalid_argument(where, "params.confidence", confidence, "must be in (0, 1)");
+    if (axis && !(axis->allFinite() && axis->norm() > 1e-12))
+      detail::throw_invalid_argument(where, "params.axis", axis->norm(),
+                                     "(its norm) must be finite and > 0");
+    if (!(max_axis_angle >= 0 && max_axis_angle <= std::numbers::pi / 2))
+      detail::throw_invalid_argument(where, "params.max_axis_angle", max_axis_angle,
+                                     "must be in [0, pi/2]");
+    if (viewpoint && !viewpoint->allFinite())
+      detail::throw_invalid(where, "argument 'params.viewpoint' must be finite");
+    hull.validate(where);
+  }
+};
+
+/// One extracted planar surface.
+struct ExtractedPlane {
+  PlanarPolygon<double> shape;  ///< plane, frame and concave hull (in the frame)
+  std::size_t inliers = 0;      ///< points of the surface (inliers in its connected piece)
+  double rms = 0;               ///< RMS point-to-plane distance of the inliers (m)
+};
+
+/// Iterative RANSAC plane extraction; owns scratch buffers reused across calls.
+class PlaneExtractor {
+ public:
+  explicit PlaneExtractor(const PlaneExtractionParams& params = {})
+      : params_(params), hull_(params.hull) {
+    params_.validate("PlaneExtractor");
+    if (params_.axis) params_.axis->normalize();
+  }
+
+  [[nodiscard]] const PlaneExtractionParams& params() const { return params_; }
+
+  /// Sets (or clears) the point normals are turned to face, e.g. the sensor of the next frame.
+  void set_viewpoint(const std::optional<Point3d>& viewpoint) {
+    if (viewpoint && !viewpoint->allFinite())
+      detail::throw_invalid("PlaneExtractor::set_viewpoint", "argument 'viewpoint' must be finite");
+    params_.viewpoint = viewpoint;
+  }
+
+  /// Extracts the planes of one cluster, points[cluster[i]], and appends them to `out`; returns
+  /// how many were appended. Non-finite points are ignored. Throws invalid_argument when an
+  /// index is out of range.
+  template <class Engine>
+  std::size_t extract(std::span<const Point3d> points, std::span<const std::uint32_t> cluster,
+                      Engine& rng, std::vector<ExtractedPlane>& out) {
+    remaining_.clear();
+    for (const std::uint32_t i : cluster) {
+      if (i >= points.size())
+        detail::throw_invalid_argument(
+            "PlaneExtractor::extract", "cluster index", i,
+            "must be < points.size() = " + std::to_string(points.size()));
+      if (points[i].allFinite()) remaining_.push_back(i);
+    }
+    const std::size_t min_remaining = std::max<std::size_t>(
+        3, params_.min_remaining != 0 ? params_.min_remaining : params_.min_inliers);
+    const std::size_t before = out.size();
+    while (remaining_.size() >= min_remaining) {
+      const std::optional<Plane3<double>> hypothesis = ransac(points, rng);
+      if (!hypothesis) break;
+      // Two rounds: inliers of the plane -> their largest connected piece (alpha shape in the
+      // plane's frame) -> least-squares refit on that piece; the second round collects the
+      // inliers of the refitted plane, whose band covers the whole surface. The other inliers
+      // stay in the cluster for the next planes.
+      Plane3<double> plane = *hypothesis;
+      PlaneFrame<double> hull_frame;
+      std::vector<Polygon2<double>> pieces;
+      std::size_t surface = 0;
+      for (int round = 0; round < 2; ++round) {
+        const std::size_t count = split_inliers(points, plane);
+        hull_frame = PlaneFrame<double>::of(plane);
+        projected_.resize(count);
+        for (std::size_t k = 0; k < count; ++k)
+          projected_[k] = hull_frame.to_plane(points[remaining_[k]]);  // Eq. (1)-(3)
+        pieces = hull_.compute(projected_, &piece_);
+        surface = 0;  // stable partition: the largest piece's points first
+        others_.clear();
+        for (std::size_t k = 0; k < count; ++k)
+          if (piece_[k] == 0)
+            remaining_[surface++] = remaining_[k];
+          else
+            others_.push_back(remaining_[k]);
+        std::copy(others_.begin(), others_.end(),
+                  remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
+        if (pieces.empty() || surface < params_.min_inliers) break;
+        const std::optional<Plane3<double>> refit = fit_least_squares(points, surface, plane);
+        if (!refit || !admissible(refit->normal)) break;
+        plane = *refit;
+      }
+      if (pieces.empty() || surface < params_.min_inliers) break;
+      if (params_.viewpoint && plane.signed_distance(*params_.viewpoint) < 0)
+        plane = plane.flipped();
+      emit(points, surface, plane, hull_frame, std::move(pieces.front()), out);
+      remaining_.erase(remaining_.begin(),
+                       remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
+    }
+    return out.size() - before;
+  }
+
+  /// Extracts the planes of every point (one cluster holding all of them).
+  template <class Engine>
+  std::size_t extract(std::span<const Point3d> points, Engine& rng,
+                      std::vector<ExtractedPlane>& out) {
+    all_.resize(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i)
+      all_[i] = static_cast<std::uint32_t>(i);
+    return extract(points, std::span<const std::uint32_t>(all_), rng, out);
+  }
+
+ private:
+  [[nodiscard]] bool admissible(const Point3d& normal) const {
+    return !params_.axis ||
+           std::abs(normal.dot(*params_.axis)) >= std::cos(params_.max_axis_angle) - 1e-12;
+  }
+
+  /// The best RANSAC plane of remaining_, or none with fewer than min_inliers inliers.
+  template <class Engine>
+  std::optional<Plane3<double>> ransac(std::span<const Point3d> points, Engine& rng) const {
+    const std::size_t n = remaining_.size();
+    std::uniform_int_distribution<std::size_t> pick(0, n - 1);
+    const double thr = params_.distance_threshold;
+    std::size_t best_count = 0;
+    std::optional<Plane3<double>> best;
+    double needed = params_.max_iterations;
+    for (int it = 0; it < params_.max_iterations && it < needed; ++it) {
+      const std::size_t a = pick(rng), b = pick(rng), c = pick(rng);
+      if (a == b || b == c || a == c) continue;
+      const Point3d& p = points[remaining_[a]];
+      const Point3d normal = (points[remaining_[b]] - p).cross(points[remaining_[c]] - p);
+      const double norm = normal.norm();
+      if (!(norm > 1e-12)) continue;  // collinear sample
+      const Point3d nn = normal / norm;
+      if (!admissible(nn)) continue;
+      const double d = -nn.dot(p);
+      std::size_t count = 0;
+      for (const std::uint32_t i : remaining_)
+        count += std::abs(nn.dot(points[i]) + d) < thr ? 1 : 0;
+      if (count > best_count) {
+        best_count = count;
+        best = Plane3<double>{nn, d};
+        // Adaptive number of hypotheses: 1 - (1 - w^3)^k >= confidence with inlier ratio w.
+        const double w = double(count) / double(n);
+        const double miss = 1 - w * w * w;
+        needed = miss <= 0 ? 0 : std::log(1 - params_.confidence) / std::log(miss);
+      }
+    }
+    if (best_count < params_.min_inliers) return std::nullopt;
+    return best;
+  }
+
+  /// Least-squares plane through points[remaining_[0 .. count)]: their centroid and smallest
+  /// principal axis, on the side of `side`'s normal.
+  std::optional<Plane3<double>> fit_least_squares(std::span<const Point3d> points,
+                                                  std::size_t count,
+                                                  const Plane3<double>& side) const {
+    if (count < 3) return std::nullopt;
+    Point3d sum = Point3d::Zero();
+    for (std::size_t k = 0; k < count; ++k)
+      sum += points[remaining_[k]];
+    const Point3d centroid = sum / double(count);
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (std::size_t k = 0; k < count; ++k) {
+      const Point3d q = points[remaining_[k]] - centroid;
+      cov.noalias() += q * q.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    Point3d normal = eig.eigenvectors().col(0);
+    if (!normal.allFinite() || normal.norm() < 0.5) return std::nullopt;
+    if (normal.dot(side.normal) < 0) normal = -normal;
+    return Plane3<double>::through(centroid, normal);
+  }
+
+  /// Moves the inliers of `plane` to the front of remaining_; returns their count.
+  std::size_t split_inliers(std::span<const Point3d> points, const Plane3<double>& plane) {
+    const double thr = params_.distance_threshold;
+    const auto mid = std::stable_partition(remaining_.begin(), remaining_.end(), [&](auto i) {
+      return std::abs(plane.signed_distance(points[i])) < thr;
+    });
+    return static_cast<std::size_t>(mid - remaining_.begin());
+  }
+
+  /// Appends the surface points[remaining_[0 .. count)] on `plane`, its hull `polygon` given in
+  /// `hull_frame` (the RANSAC plane's) re-expressed in the refitted plane's frame.
+  void emit(std::span<const Point3d> points, std::size_t count, const Plane3<double>& plane,
+            const PlaneFrame<double>& hull_frame, Polygon2<double> polygon,
+            std::vector<ExtractedPlane>& out) const {
+    ExtractedPlane e;
+    e.shape.plane = plane;
+    e.shape.frame = PlaneFrame<double>::of(plane);
+    const auto reframe = [&](std::vector<Point2d>& ring) {
+      for (Point2d& v : ring)
+        v = e.shape.frame.to_plane(hull_frame.to_world(v));  // Eq. (3) onto the refitted plane
+    };
+    reframe(polygon.outer);
+    for (auto& h : polygon.holes)
+      reframe(h);
+    if (Polygon2<double>::ring_signed_area(polygon.outer) < 0) {  // a flipped normal mirrors
+      std::reverse(polygon.outer.begin(), polygon.outer.end());
+      for (auto& h : polygon.holes)
+        std::reverse(h.begin(), h.end());
+    }
+    e.shape.polygon = std::move(polygon);
+    double sum_sq = 0;
+    for (std::size_t k = 0; k < count; ++k) {
+      const double delta = plane.signed_distance(points[remaining_[k]]);  // Eq. (2)
+      sum_sq += delta * delta;
+    }
+    e.inliers = count;
+    e.rms = std::sqrt(sum_sq / double(count));
+    out.push_back(std::move(e));
+  }
+
+  PlaneExtractionParams params_;
+  ConcaveHull hull_;
+  std::vector<std::uint32_t> remaining_;
+  std::vector<std::uint32_t> all_;
+  std::vector<Point2d> projected_;
+  std::vector<std::int32_t> piece_;
+  std::vector<std::uint32_t> others_;
+};
+
+}  // namespace rangenav

@@ -1,0 +1,194 @@
+#pragma once
+// Polygon clipping for the geometric maps of paper 004 (§3.4): the two operations the merge step
+// needs, an intersection test and the union of two simple polygons with holes (concave shapes
+// included), behind the `PolygonClipper` concept, and its default backend on Boost.Geometry.
+// The Vatti backend on Clipper (libpolyclipping) lives in geometry/vatti_clipper.hpp and is
+// compiled only where that library is installed.
+//
+// Conventions shared by every backend:
+// - Input rings may have either orientation and must not repeat their first vertex; a hole must
+//   lie inside its outer ring. Each input polygon must be simple (no self-intersections).
+// - `intersects(a, b)` is true when the interiors of a and b overlap, i.e. their intersection has
+//   a positive area. Polygons that only touch along an edge or at a point do not intersect: the
+//   paper computes the intersection and merges only when it is not empty.
+// - `union_of(a, b)` returns the union as a list of polygons with holes (outer counter-clockwise,
+//   holes clockwise, open rings, as Polygon2): one polygon when a and b overlap, two when they are
+//   disjoint, and possibly several when they touch only at points (each connected piece of the
+//   union's interior is one polygon). The total area is area(a) + area(b) - area(a ∩ b).
+
+#include <cmath>
+#include <concepts>
+#include <cstddef>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include <boost/geometry.hpp>
+#include <boost/geometry/geometries/point_xy.hpp>
+#include <boost/geometry/geometries/polygon.hpp>
+
+#include "rangenav/core/error.hpp"
+#include "rangenav/core/types.hpp"
+#include "rangenav/geometry/planar_polygon.hpp"
+
+namespace rangenav {
+
+/// An intersection test and a union of two Polygon2 (see the conventions at the top of the file).
+template <class C, class Scalar = double>
+concept PolygonClipper = requires(const C& clipper, const Polygon2<Scalar>& a,
+                                  const Polygon2<Scalar>& b) {
+  { clipper.intersects(a, b) } -> std::convertible_to<bool>;
+  { clipper.union_of(a, b) } -> std::same_as<std::vector<Polygon2<Scalar>>>;
+};
+
+/// Boost.Geometry's point and polygon with Polygon2's conventions: outer ring counter-clockwise
+/// (ClockWise = false), open rings (Closed = false).
+template <class Scalar = double>
+using BoostPoint2 = boost::geometry::model::d2::point_xy<Scalar>;
+template <class Scalar = double>
+using BoostPolygon2 = boost::geometry::model::polygon<BoostPoint2<Scalar>, false, false>;
+
+namespace detail {
+
+/// Throws invalid_argument unless `polygon` has an outer ring of >= 3 vertices, holes of >= 3
+/// vertices and finite coordinates only.
+template <class Scalar>
+void require_valid_polygon(const char* where, const char* name, const Polygon2<Scalar>& polygon) {
+  const auto check_ring = [&](const std::vector<Point<2, Scalar>>& ring, const char* what) {
+    if (ring.size() < 3)
+      throw_invalid_argument(where, std::string(name) + what + " vertices", ring.size(),
+                             "must be >= 3");
+    for (const auto& p : ring)
+      if (!p.allFinite())
+        throw_invalid(where, std::string("argument '") + name + "' has a non-finite vertex");
+  };
+  check_ring(polygon.outer, ".outer");
+  for (const auto& h : polygon.holes)
+    check_ring(h, ".holes[i]");
+}
+
+}  // namespace detail
+
+/// Polygon2 -> Boost.Geometry polygon, with orientations corrected (outer counter-clockwise,
+/// holes clockwise) so that either input orientation is accepted.
+template <class Scalar>
+[[nodiscard]] BoostPolygon2<Scalar> to_boost_polygon(const Polygon2<Scalar>& polygon) {
+  BoostPolygon2<Scalar> out;
+  auto& outer = out.outer();
+  outer.reserve(polygon.outer.size());
+  for (const auto& p : polygon.outer)
+    outer.emplace_back(p.x(), p.y());
+  out.inners().resize(polygon.holes.size());
+  for (std::size_t h = 0; h < polygon.holes.size(); ++h) {
+    auto& ring = out.inners()[h];
+    ring.reserve(polygon.holes[h].size());
+    for (const auto& p : polygon.holes[h])
+      ring.emplace_back(p.x(), p.y());
+  }
+  boost::geometry::correct(out);
+  return out;
+}
+
+/// Boost.Geometry polygon (counter-clockwise, open) -> Polygon2.
+template <class Scalar>
+[[nodiscard]] Polygon2<Scalar> from_boost_polygon(const BoostPolygon2<Scalar>& polygon) {
+  const auto copy_ring = [](const auto& ring) {
+    std::vector<Point<2, Scalar>> out;
+    out.reserve(ring.size());
+    for (const auto& p : ring)
+      out.emplace_back(p.x(), p.y());
+    return out;
+  };
+  Polygon2<Scalar> out;
+  out.outer = copy_ring(polygon.outer());
+  out.holes.reserve(polygon.inners().size());
+  for (const auto& h : polygon.inners())
+    out.holes.push_back(copy_ring(h));
+  return out;
+}
+
+// g++ 12 reports a false -Wmaybe-uninitialized inside Boost 1.74's rescale policy (the scale factor
+// of get_rescale_policy, always set before use) wherever union_ or relate is inlined; silence it
+// for the calls below only.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
+namespace detail {
+
+// Out of line so that the warning above is attributed to these bodies, inside the pragma.
+// As the paper does with Vatti's algorithm: the intersection, tested for a positive area. (A DE-9IM
+// relate would be the direct test, but its out-of-line body in Boost trips the same warning.)
+template <class Scalar>
+[[gnu::noinline]] bool boost_interiors_intersect(const BoostPolygon2<Scalar>& a,
+                                                 const BoostPolygon2<Scalar>& b) {
+  boost::geometry::model::multi_polygon<BoostPolygon2<Scalar>> common;
+  boost::geometry::intersection(a, b, common);
+  return boost::geometry::area(common) > Scalar(0);
+}
+
+template <class Scalar>
+[[gnu::noinline]] void boost_union(
+    const BoostPolygon2<Scalar>& a, const BoostPolygon2<Scalar>& b,
+    boost::geometry::model::multi_polygon<BoostPolygon2<Scalar>>& out) {
+  boost::geometry::union_(a, b, out);
+}
+
+}  // namespace detail
+
+/// The default PolygonClipper on Boost.Geometry (header-only): the intersection test computes
+/// boost::geometry::intersection and checks for a positive area, the union is
+/// boost::geometry::union_. Boost 1.74
+/// rescales the coordinates to an integer grid internally for robust overlays.
+/// Stateless and thread-safe.
+struct BoostGeometryClipper {
+  /// True when the interiors of a and b overlap (positive intersection area). Throws
+  /// invalid_argument for a polygon with fewer than 3 vertices in a ring or a non-finite vertex.
+  template <class Scalar>
+  [[nodiscard]] bool intersects(const Polygon2<Scalar>& a, const Polygon2<Scalar>& b) const {
+    constexpr const char* where = "BoostGeometryClipper::intersects";
+    detail::require_valid_polygon(where, "a", a);
+    detail::require_valid_polygon(where, "b", b);
+    const auto pa = to_boost_polygon(a);
+    const auto pb = to_boost_polygon(b);
+    try {
+      return detail::boost_interiors_intersect(pa, pb);
+    } catch (const std::exception& e) {
+      detail::throw_invalid(where, std::string("Boost.Geometry rejected the input: ") + e.what());
+    }
+  }
+
+  /// The union of a and b as a list of polygons with holes (see the file's conventions). Throws
+  /// invalid_argument like intersects() and when Boost.Geometry rejects the input (e.g. a
+  /// self-intersecting ring).
+  template <class Scalar>
+  [[nodiscard]] std::vector<Polygon2<Scalar>> union_of(const Polygon2<Scalar>& a,
+                                                       const Polygon2<Scalar>& b) const {
+    constexpr const char* where = "BoostGeometryClipper::union_of";
+    detail::require_valid_polygon(where, "a", a);
+    detail::require_valid_polygon(where, "b", b);
+    const auto pa = to_boost_polygon(a);
+    const auto pb = to_boost_polygon(b);
+    boost::geometry::model::multi_polygon<BoostPolygon2<Scalar>> result;
+    try {
+      detail::boost_union(pa, pb, result);
+    } catch (const std::exception& e) {
+      detail::throw_invalid(where, std::string("Boost.Geometry rejected the input: ") + e.what());
+    }
+    std::vector<Polygon2<Scalar>> out;
+    out.reserve(result.size());
+    for (const auto& p : result)
+      out.push_back(from_boost_polygon(p));
+    return out;
+  }
+};
+
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
+
+static_assert(PolygonClipper<BoostGeometryClipper, double>);
+static_assert(PolygonClipper<BoostGeometryClipper, float>);
+
+}  // namespace rangenav

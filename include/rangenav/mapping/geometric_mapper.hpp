@@ -1,0 +1,212 @@
+#pragma once
+// The geometric-mapping pipeline of paper 004 (Fig. 1, §3.1-3.3) up to the extracted planes:
+//   key frames (a KeyFrameSelector on the odometry: only frames taken after the sensor moved
+//   enough are processed at all) -> registration by the IncrementalMapper (voxel downsampling,
+//   ICP of the downsampled frame against the point map with a DecayingDistanceRejector and a
+//   FrustumRejector in model_in_data_frustum mode, so only the part of the map in the sensor's
+//   field of view pairs; fitness rejection, after which the next frame is tried; the aligned frame
+//   joins the SparsePointMap) -> the full-resolution frame, transformed by the registration, is
+//   clustered (euclidean_clusters on a KdTree) and its planes extracted per cluster
+//   (PlaneExtractor: iterative RANSAC, least-squares refit, alpha-shape hull).
+// The stages are public so that a caller (or a benchmark) can run and time them one by one;
+// process() runs them in order. The planes of a key frame are handed to the geometric map
+// (mapping/geometric_map.hpp) for aggregation.
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "rangenav/core/error.hpp"
+#include "rangenav/core/point_cloud.hpp"
+#include "rangenav/core/types.hpp"
+#include "rangenav/geometry/euclidean_clustering.hpp"
+#include "rangenav/geometry/plane_extraction.hpp"
+#include "rangenav/geometry/voxel_grid.hpp"
+#include "rangenav/mapping/incremental_mapper.hpp"
+#include "rangenav/mapping/key_frame.hpp"
+#include "rangenav/mapping/sparse_point_map.hpp"
+#include "rangenav/registration/frustum.hpp"
+#include "rangenav/registration/icp.hpp"
+#include "rangenav/registration/rejectors.hpp"
+#include "rangenav/search/kd_tree.hpp"
+
+namespace rangenav {
+
+struct GeometricMapperParams {
+  /// Key-frame selection on the pose guess ("only ... if the robot moved to a certain extent").
+  KeyFrameParams<double> key_frames{};
+  /// Voxel filter applied to every key frame before registration (m).
+  double voxel_leaf = 0.05;
+  /// Point map density (eps_D of the sparse map, m); the paper keeps the downsampled frames.
+  double point_map_epsilon = 0.05;
+  /// The sensor's field of view in its own frame (x along the optical axis); `frustum.pose` is
+  /// ignored (the frame's points are in the sensor frame). Kinect-like by default.
+  Frustum<3, double> frustum = [] {
+    Frustum<3, double> f;
+    f.near = 0.3;
+    f.far = 6.0;
+    f.horizontal_fov = 57.0 * std::numbers::pi / 180.0;
+    f.vertical_fov = 43.0 * std::numbers::pi / 180.0;
+    return f;
+  }();
+  IcpParams<double> icp = [] {
+    IcpParams<double> p;
+    p.max_iterations = 30;
+    p.check_degeneracy = false;
+    return p;
+  }();
+  /// Pair distance threshold of the ICP, decaying per iteration from initial to final (m).
+  double initial_match_distance = 0.3;
+  double final_match_distance = 0.08;
+  /// Fitness rejection: a frame whose ICP fitness (matched / data points) is below this, or
+  /// whose ICP found too few pairs, is not used.
+  double min_fitness = 0.6;
+  /// Plane extraction runs on the full-resolution aligned frame (0), or on the frame voxel-
+  /// filtered at this leaf size (m) to bound its cost.
+  double extraction_leaf = 0.0;
+  EuclideanClusteringParams clustering{0.05, 500, std::numeric_limits<std::size_t>::max()};
+  PlaneExtractionParams planes{};
+
+  void validate(std::string_view where) const {
+    key_frames.validate();
+    detail::require_positive(where, "params.voxel_leaf", voxel_leaf);
+    detail::require_positive(where, "params.point_map_epsilon", point_map_epsilon);
+    frustum.validate();
+    icp.validate();
+    DecayingDistanceRejector<double>{initial_match_distance, final_match_distance, 0.7}.validate();
+    if (!(min_fitness >= 0 && min_fitness <= 1))
+      detail::throw_invalid_argument(where, "params.min_fitness", min_fitness, "must be in [0, 1]");
+    detail::require_non_negative(where, "params.extraction_leaf", extraction_leaf);
+    clustering.validate(where);
+    planes.validate(where);
+  }
+};
+
+/// What happened to one frame.
+struct GeometricFrameReport {
+  bool key_frame = false;   ///< far enough from the last key frame to be processed
+  bool registered = false;  ///< aligned (or the first frame) and passed the fitness test
+  Transform3d pose = Transform3d::Identity();  ///< sensor -> world after registration
+  std::optional<IcpResult<3, double>> icp;     ///< the alignment (none for the first frame)
+  std::size_t downsampled_points = 0;
+  std::size_t extraction_points = 0;  ///< finite points the plane extraction saw
+  std::size_t clusters = 0;
+  std::vector<ExtractedPlane> planes;  ///< in world coordinates
+};
+
+/// Registration and plane extraction of paper 004's pipeline (see the file comment). Owns the
+/// point map; one object per sequence and thread.
+class GeometricMapper {
+ public:
+  using Rejector = FrustumRejector<3, double>;
+  using IcpType = Icp<3, double, DecayingDistanceRejector<double>, Rejector>;
+
+  explicit GeometricMapper(const GeometricMapperParams& params = {})
+      : params_(validated(params)),
+        selector_(params_.key_frames),
+        registration_(registration_params(params_)),
+        extractor_(params_.planes) {
+    auto& icp = registration_.icp;
+    icp.params = params_.icp;
+    icp.rejector<DecayingDistanceRejector<double>>() = {params_.initial_match_distance,
+                                                        params_.final_match_distance, 0.7};
+    Frustum<3, double> f = params_.frustum;
+    f.pose = Transform3d::Identity();  // the data sensor sits at the data frame's origin
+    icp.rejector<Rejector>() = Rejector(f, Rejector::Mode::model_in_data_frustum);
+  }
+
+  [[nodiscard]] const GeometricMapperParams& params() const { return params_; }
+  /// The point map, in the frame of the first key frame's odometry pose, map_origin().
+  [[nodiscard]] const SparsePointMap<3, double>& point_map() const { return registration_.map(); }
+  /// The pose of the point map's frame in the world (identity before the first key frame).
+  [[nodiscard]] Transform3d map_origin() const { return origin_.value_or(Transform3d::Identity()); }
+  /// Key frames registered so far.
+  [[nodiscard]] std::size_t key_frames() const { return key_frames_; }
+
+  /// Runs the pipeline on one frame: `cloud` in the sensor frame (NaN points allowed, e.g. an
+  /// organised depth image), `odometry` the sensor -> world pose by odometry. Returns the report;
+  /// report.planes holds the key frame's planes when it was registered.
+  template <PointCloudOf<3> C, class Engine>
+  GeometricFrameReport process(const C& cloud, const Transform3d& odometry, Engine& rng) {
+    GeometricFrameReport report;
+    report.pose = odometry;
+    report.key_frame = selector_.is_key_frame(odometry);
+    if (!report.key_frame) return report;
+    if (!register_frame(cloud, odometry, report)) return report;
+    extract_planes(cloud, report, rng);
+    return report;
+  }
+
+  /// Stage 1: registration of a key frame (see the file comment); the guess is the last
+  /// registered pose composed with the odometry increment. Returns report.registered; a frame
+  /// that fails the fitness test is not recorded as a key frame, so the next one is tried.
+  template <PointCloudOf<3> C>
+  bool register_frame(const C& cloud, const Transform3d& odometry, GeometricFrameReport& report) {
+    // The IncrementalMapper's map frame is its first frame's; the odometry is handed to it
+    // relative to the first key frame, so that its poses are world poses after `origin_`.
+    if (!origin_) origin_ = odometry;
+    const Transform3d relative = origin_->inverse(Eigen::Isometry) * odometry;
+    const MapperUpdate<3, double> update = registration_.process(cloud, relative);
+    report.pose = *origin_ * update.pose;
+    report.icp = update.icp;
+    report.downsampled_points = update.icp ? update.icp->data_count : 0;
+    report.registered = update.registration_accepted;
+    if (report.registered) {
+      selector_.accept(odometry);
+      ++key_frames_;
+    }
+    return report.registered;
+  }
+
+  /// Stage 2: Euclidean clustering and plane extraction on the aligned full-resolution frame
+  /// (or its extraction_leaf voxel filter); appends to report.planes.
+  template <PointCloudOf<3> C, class Engine>
+  void extract_planes(const C& cloud, GeometricFrameReport& report, Engine& rng) {
+    world_.clear();
+    const std::size_t n = traits::size(cloud);
+    world_.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Point3d p = traits::point(cloud, i).template cast<double>();
+      if (p.allFinite()) world_.push_back(report.pose * p);
+    }
+    if (params_.extraction_leaf > 0) world_ = voxel_downsample(world_, params_.extraction_leaf);
+    report.extraction_points = world_.size();
+    if (world_.size() < 3) return;
+    const KdTree<3, double> tree(std::move(world_));
+    const auto clusters = euclidean_clusters(tree, params_.clustering);
+    report.clusters = clusters.size();
+    extractor_.set_viewpoint(Point3d(report.pose.translation()));
+    for (const auto& cluster : clusters)
+      extractor_.extract(std::span<const Point3d>(tree.points()), cluster, rng, report.planes);
+  }
+
+ private:
+  static const GeometricMapperParams& validated(const GeometricMapperParams& p) {
+    p.validate("GeometricMapper");
+    return p;
+  }
+  static IncrementalMapperParams<double> registration_params(const GeometricMapperParams& p) {
+    IncrementalMapperParams<double> r;
+    r.key_frames = {0.0, 0.0};  // every registered key frame joins the point map
+    r.map.epsilon_d = p.point_map_epsilon;
+    r.min_fitness = p.min_fitness;
+    r.final_match_distance = p.final_match_distance;
+    r.voxel_size = p.voxel_leaf;
+    return r;
+  }
+
+  GeometricMapperParams params_;
+  KeyFrameSelector<3, double> selector_;
+  IncrementalMapper<3, double, IcpType> registration_;
+  PlaneExtractor extractor_;
+  std::size_t key_frames_ = 0;
+  std::optional<Transform3d> origin_;
+  std::vector<Point3d> world_;
+};
+
+}  // namespace rangenav

@@ -1,0 +1,360 @@
+// Euclidean clustering, alpha-shape concave hulls and iterative RANSAC plane extraction
+// (paper 004 §3.3), against brute force and closed-form shapes.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <numeric>
+#include <random>
+#include <vector>
+
+#include "rangenav/core/error.hpp"
+#include "rangenav/geometry/concave_hull.hpp"
+#include "rangenav/geometry/euclidean_clustering.hpp"
+#include "rangenav/geometry/plane_extraction.hpp"
+#include "rangenav/search/kd_tree.hpp"
+#include "rangenav/search/nearest_neighbor_search.hpp"
+
+using namespace rangenav;
+
+namespace {
+
+// ---- clustering ---------------------------------------------------------------------------
+
+std::size_t find_root(std::vector<std::size_t>& parent, std::size_t i) {
+  while (parent[i] != i)
+    i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+/// Brute-force connected components under `tolerance` (all pairs, union-find), each sorted.
+std::vector<std::vector<std::uint32_t>> brute_force_clusters(const std::vector<Point3d>& pts,
+                                                             double tolerance) {
+  std::vector<std::size_t> parent(pts.size());
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    for (std::size_t j = i + 1; j < pts.size(); ++j)
+      if ((pts[i] - pts[j]).squaredNorm() < tolerance * tolerance)
+        parent[find_root(parent, i)] = find_root(parent, j);
+  std::vector<std::vector<std::uint32_t>> by_root(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    by_root[find_root(parent, i)].push_back(static_cast<std::uint32_t>(i));
+  std::vector<std::vector<std::uint32_t>> out;
+  for (auto& c : by_root)
+    if (!c.empty()) out.push_back(std::move(c));
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<std::vector<std::uint32_t>> sorted_clusters(std::vector<std::vector<std::uint32_t>> c) {
+  for (auto& v : c)
+    std::sort(v.begin(), v.end());
+  std::sort(c.begin(), c.end());
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("euclidean_clusters equals brute-force connected components", "[geometry]") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 2.0);
+  std::normal_distribution<double> blob(0.0, 0.05);
+  std::vector<Point3d> pts;
+  for (int b = 0; b < 6; ++b) {
+    const Point3d c(u(rng), u(rng), u(rng));
+    for (int k = 0; k < 60; ++k)
+      pts.push_back(c + Point3d(blob(rng), blob(rng), blob(rng)));
+  }
+  for (int k = 0; k < 40; ++k)
+    pts.emplace_back(u(rng), u(rng), u(rng));  // scattered points, mostly singletons
+  const KdTree<3, double> tree(pts);
+  for (const double tol : {0.03, 0.08, 0.2}) {
+    const auto clusters =
+        euclidean_clusters(tree, {tol, 1, std::numeric_limits<std::size_t>::max()});
+    CHECK(sorted_clusters(clusters) == brute_force_clusters(pts, tol));
+    for (std::size_t i = 1; i < clusters.size(); ++i)
+      CHECK(clusters[i - 1].size() >= clusters[i].size());
+  }
+  // The same partition through the brute-force search model.
+  const BruteForceSearch<3, double> brute(pts);
+  CHECK(sorted_clusters(euclidean_clusters(brute, {0.08, 1, 1000})) ==
+        brute_force_clusters(pts, 0.08));
+}
+
+TEST_CASE("euclidean_clusters keeps known clusters within the size bounds", "[geometry]") {
+  // Three lines of points 1 cm apart, 20, 50 and 80 points, 1 m from each other.
+  std::vector<Point3d> pts;
+  for (int line = 0; line < 3; ++line)
+    for (int k = 0; k < 20 + 30 * line; ++k)
+      pts.emplace_back(0.01 * k, 1.0 * line, 0.0);
+  const KdTree<3, double> tree(pts);
+  const auto all = euclidean_clusters(tree, {0.015, 1, 1000});
+  REQUIRE(all.size() == 3);
+  CHECK(all[0].size() == 80);
+  CHECK(all[1].size() == 50);
+  CHECK(all[2].size() == 20);
+  const auto mid = euclidean_clusters(tree, {0.015, 30, 60});
+  REQUIRE(mid.size() == 1);
+  CHECK(mid[0].size() == 50);
+  CHECK(euclidean_clusters(tree, {0.009, 2, 1000}).empty());  // every point alone
+  CHECK(euclidean_clusters(KdTree<3, double>(std::vector<Point3d>{}), {}).empty());
+  CHECK_THROWS_WITH(
+      euclidean_clusters(tree, {0.0, 1, 10}),
+      "rangenav: euclidean_clusters: argument 'params.tolerance' = 0 must be finite and > 0");
+  CHECK_THROWS_WITH(
+      euclidean_clusters(tree, {0.1, 10, 5}),
+      "rangenav: euclidean_clusters: argument 'params.max_cluster_size' = 5 must be >= "
+      "params.min_cluster_size = 10");
+}
+
+// ---- concave hull -------------------------------------------------------------------------
+
+namespace {
+
+/// Grid samples at `step` of the points inside a predicate over [x0, x1] x [y0, y1].
+template <class Inside>
+std::vector<Point2d> grid_samples(double x0, double y0, double x1, double y1, double step,
+                                  Inside inside) {
+  std::vector<Point2d> pts;
+  const int nx = static_cast<int>(std::lround((x1 - x0) / step));
+  const int ny = static_cast<int>(std::lround((y1 - y0) / step));
+  for (int i = 0; i <= nx; ++i)
+    for (int j = 0; j <= ny; ++j) {
+      const Point2d p(x0 + step * i, y0 + step * j);
+      if (inside(p)) pts.push_back(p);
+    }
+  return pts;
+}
+
+bool is_simple_ccw(const std::vector<Point2d>& ring) {
+  if (Polygon2<double>::ring_signed_area(ring) <= 0) return false;
+  std::vector<Point2d> sorted = ring;  // no repeated vertex
+  std::sort(sorted.begin(), sorted.end(), [](const Point2d& a, const Point2d& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  return std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end();
+}
+
+}  // namespace
+
+TEST_CASE("concave_hull of an L-shape follows its concave corner", "[geometry]") {
+  // L = [0, 2] x [0, 1] united with [0, 1] x [1, 2]: area 3, perimeter 8.
+  const double step = 0.02;
+  const auto pts = grid_samples(
+      0, 0, 2, 2, step, [](const Point2d& p) { return p.y() <= 1 + 1e-9 || p.x() <= 1 + 1e-9; });
+  const auto hulls = concave_hull(pts, {0.03, 0.001, 0.0});
+  REQUIRE(hulls.size() == 1);
+  const auto& poly = hulls[0];
+  CHECK(poly.holes.empty());
+  CHECK(is_simple_ccw(poly.outer));
+  // The samples' alpha shape is the L with its reflex corner cut by half a grid cell: the
+  // triangle (1, 1), (1 + s, 1), (1, 1 + s) is a Delaunay triangle of circumradius s / sqrt 2.
+  CHECK(poly.area() == Approx(3.0 + step * step / 2).epsilon(1e-9));
+  // Every boundary vertex lies on the L's boundary; the corner (1, 1) is cut off.
+  bool corner = false;
+  for (const Point2d& p : poly.outer) {
+    const bool on_edge = std::abs(p.x()) < 1e-9 || std::abs(p.y()) < 1e-9 ||
+                         (std::abs(p.x() - 2) < 1e-9 && p.y() <= 1 + 1e-9) ||
+                         (std::abs(p.y() - 2) < 1e-9 && p.x() <= 1 + 1e-9) ||
+                         (std::abs(p.x() - 1) < 1e-9 && p.y() >= 1 - 1e-9) ||
+                         (std::abs(p.y() - 1) < 1e-9 && p.x() >= 1 - 1e-9);
+    CHECK(on_edge);
+    corner = corner || (p - Point2d(1, 1)).norm() < 1e-9;
+  }
+  CHECK(!corner);
+  // A huge alpha gives the convex hull instead: area 4 - 1/2.
+  const auto convex = concave_hull(pts, {10.0, 0.001, 0.0});
+  REQUIRE(convex.size() == 1);
+  CHECK(convex[0].area() == Approx(3.5).epsilon(1e-9));
+}
+
+TEST_CASE("concave_hull of a square with a hole has one clockwise hole", "[geometry]") {
+  // [0, 2]^2 without the open square (0.6, 1.4)^2: area 4 - 0.64 = 3.36, and as in the L-shape
+  // every corner of the hole is cut by a triangle of half a grid cell, s^2 / 2 = 0.0002.
+  const auto pts = grid_samples(0, 0, 2, 2, 0.02, [](const Point2d& p) {
+    return !(p.x() > 0.6 + 1e-9 && p.x() < 1.4 - 1e-9 && p.y() > 0.6 + 1e-9 && p.y() < 1.4 - 1e-9);
+  });
+  const auto hulls = concave_hull(pts, {0.03, 0.001, 0.0});
+  REQUIRE(hulls.size() == 1);
+  REQUIRE(hulls[0].holes.size() == 1);
+  CHECK(Polygon2<double>::ring_signed_area(hulls[0].outer) == Approx(4.0));
+  CHECK(Polygon2<double>::ring_signed_area(hulls[0].holes[0]) == Approx(-0.64 + 4 * 0.0002));
+  CHECK(hulls[0].area() == Approx(3.36 + 4 * 0.0002));
+}
+
+TEST_CASE("concave_hull of disc samples approaches the disc", "[geometry]") {
+  // Uniform random samples of a disc of radius 1: the hull's area tends to pi from below and its
+  // vertices lie near the circle.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Point2d> pts;
+  while (pts.size() < 20000) {
+    const Point2d p(u(rng), u(rng));
+    if (p.norm() <= 1.0) pts.push_back(p);
+  }
+  const auto hulls = concave_hull(pts, {0.1, 0.001, 0.0});
+  REQUIRE(hulls.size() == 1);
+  CHECK(hulls[0].holes.empty());
+  CHECK(is_simple_ccw(hulls[0].outer));
+  CHECK(hulls[0].area() == Approx(std::numbers::pi).epsilon(0.01));
+  CHECK(hulls[0].area() < std::numbers::pi);
+  for (const Point2d& p : hulls[0].outer)
+    CHECK(p.norm() > 0.95);
+}
+
+TEST_CASE("concave_hull separates pieces and handles degenerate input", "[geometry]") {
+  // Two unit squares 0.5 m apart: two polygons, largest first; min_area drops the small one.
+  auto pts = grid_samples(0, 0, 1, 1, 0.05, [](const Point2d&) { return true; });
+  for (const Point2d& p : grid_samples(1.5, 0, 2.0, 0.5, 0.05, [](const Point2d&) { return true; }))
+    pts.push_back(p);
+  const auto two = concave_hull(pts, {0.05, 0.001, 0.0});
+  REQUIRE(two.size() == 2);
+  CHECK(two[0].area() == Approx(1.0));
+  CHECK(two[1].area() == Approx(0.25));
+  CHECK(concave_hull(pts, {0.05, 0.001, 0.3}).size() == 1);
+  // Fewer than three distinct points, collinear points, alpha below the spacing: nothing.
+  CHECK(concave_hull(std::vector<Point2d>{{0, 0}, {1, 0}, {1, 0}}).empty());
+  CHECK(concave_hull(std::vector<Point2d>{{0, 0}, {1, 0}, {2, 0}, {3, 0}}).empty());
+  CHECK(concave_hull(pts, {0.01, 0.001, 0.0}).empty());
+  CHECK(concave_hull(std::vector<Point2d>{}).empty());
+  CHECK_THROWS_WITH(concave_hull(std::vector<Point2d>{{0, 0}, {std::nan(""), 1}}),
+                    "rangenav: ConcaveHull::compute: argument 'cloud[1]' = nan 1 must be finite");
+  CHECK_THROWS_WITH(ConcaveHull({-1.0, 0.001, 0.0}),
+                    "rangenav: ConcaveHull: argument 'params.alpha' = -1 must be finite and > 0");
+}
+
+// ---- plane extraction ---------------------------------------------------------------------
+
+namespace {
+
+/// A corner of a room: floor z = 0 ([0, 2] x [0, 2]), wall x = 0 (y in [0, 2], z in [0, 1.5])
+/// and a table top z = 0.7 ([1, 1.6] x [0.8, 1.4]); samples every 2.5 cm with Gaussian noise.
+std::vector<Point3d> room_corner(double sigma, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma > 0 ? sigma : 1.0);
+  const auto n = [&]() { return sigma > 0 ? noise(rng) : 0.0; };
+  std::vector<Point3d> pts;
+  const double s = 0.025;
+  for (int i = 0; i <= 80; ++i)
+    for (int j = 0; j <= 80; ++j) {
+      pts.emplace_back(s * i, s * j, n());               // floor
+      if (i <= 60) pts.emplace_back(n(), s * j, s * i);  // wall
+    }
+  for (int i = 0; i <= 24; ++i)
+    for (int j = 0; j <= 24; ++j)
+      pts.emplace_back(1.0 + s * i, 0.8 + s * j, 0.7 + n());
+  return pts;
+}
+
+const ExtractedPlane* find_plane(const std::vector<ExtractedPlane>& planes, const Point3d& normal,
+                                 double d) {
+  for (const auto& p : planes) {
+    Plane3<double> pl = p.shape.plane;
+    if (pl.normal.dot(normal) < 0) pl = pl.flipped();
+    if (pl.normal.dot(normal) > 0.999 && std::abs(pl.d - d) < 0.01) return &p;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+TEST_CASE("PlaneExtractor finds the planes of a room corner with their outlines", "[geometry]") {
+  const auto pts = room_corner(0.005, 11);
+  PlaneExtractionParams params;
+  params.distance_threshold = 0.02;
+  params.min_inliers = 200;
+  params.hull.alpha = 0.05;
+  params.viewpoint = Point3d(3, 3, 2);
+  PlaneExtractor extractor(params);
+  std::mt19937 rng(1);
+  std::vector<ExtractedPlane> planes;
+  CHECK(extractor.extract(pts, rng, planes) == 3);
+  REQUIRE(planes.size() == 3);
+  const auto* floor = find_plane(planes, {0, 0, 1}, 0.0);
+  const auto* wall = find_plane(planes, {1, 0, 0}, 0.0);
+  const auto* table = find_plane(planes, {0, 0, 1}, -0.7);
+  REQUIRE(floor != nullptr);
+  REQUIRE(wall != nullptr);
+  REQUIRE(table != nullptr);
+  CHECK(floor->shape.plane.normal.z() > 0.999);  // faces the viewpoint
+  CHECK(wall->shape.plane.normal.x() > 0.999);
+  CHECK(floor->inliers >= 81 * 81 - 100);
+  CHECK(floor->rms == Approx(0.005).epsilon(0.2));
+  // Outline areas against the true rectangles (noise and the 2 cm band blur the borders).
+  CHECK(floor->shape.area() == Approx(4.0).epsilon(0.03));
+  CHECK(wall->shape.area() == Approx(3.0).epsilon(0.03));
+  CHECK(table->shape.area() == Approx(0.36).epsilon(0.06));
+  for (const auto& p : planes)
+    CHECK(is_simple_ccw(p.shape.polygon.outer));
+  for (const Point3d& v : table->shape.outer_world()) {
+    CHECK(v.z() == Approx(0.7).margin(0.01));
+    CHECK(v.x() > 0.98);
+    CHECK(v.x() < 1.62);
+  }
+}
+
+TEST_CASE("PlaneExtractor honours the orientation constraint and is deterministic", "[geometry]") {
+  const auto pts = room_corner(0.0, 2);
+  PlaneExtractionParams params;
+  params.min_inliers = 200;
+  params.axis = Point3d(0, 0, 2);  // horizontal planes only
+  PlaneExtractor extractor(params);
+  std::mt19937 rng(5);
+  std::vector<ExtractedPlane> planes;
+  extractor.extract(pts, rng, planes);
+  REQUIRE(planes.size() == 2);
+  for (const auto& p : planes)
+    CHECK(std::abs(p.shape.plane.normal.z()) > 0.999);
+  CHECK(find_plane(planes, {0, 0, 1}, -0.7) != nullptr);
+
+  // The same seed gives the same planes; a cluster subset gives only its plane.
+  PlaneExtractor again(params);
+  std::mt19937 rng2(5);
+  std::vector<ExtractedPlane> planes2;
+  again.extract(pts, rng2, planes2);
+  REQUIRE(planes2.size() == planes.size());
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    CHECK(planes2[i].shape.plane.normal == planes[i].shape.plane.normal);
+    CHECK(planes2[i].shape.polygon.outer == planes[i].shape.polygon.outer);
+  }
+  std::vector<std::uint32_t> table;
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    if (pts[i].z() > 0.6 && pts[i].x() > 0.5) table.push_back(static_cast<std::uint32_t>(i));
+  std::vector<ExtractedPlane> only;
+  CHECK(PlaneExtractor(PlaneExtractionParams{}).extract(pts, table, rng, only) == 1);
+  REQUIRE(only.size() == 1);
+  CHECK(only[0].inliers == 625);
+  CHECK(find_plane(only, {0, 0, 1}, -0.7) != nullptr);
+}
+
+TEST_CASE("PlaneExtractor stops on small clusters and rejects bad input", "[geometry]") {
+  std::mt19937 rng(1);
+  std::vector<ExtractedPlane> out;
+  PlaneExtractionParams params;
+  params.min_inliers = 50;
+  PlaneExtractor ex(params);
+  // Points on no plane (a sphere shell): nothing.
+  std::vector<Point3d> shell;
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (int k = 0; k < 400; ++k)
+    shell.push_back(Point3d(g(rng), g(rng), g(rng)).normalized());
+  CHECK(ex.extract(shell, rng, out) == 0);
+  // Fewer points than min_inliers: nothing, no RANSAC.
+  std::vector<Point3d> few(10, Point3d(1, 2, 3));
+  CHECK(ex.extract(few, rng, out) == 0);
+  const std::vector<std::uint32_t> bad{0, 10};
+  CHECK_THROWS_WITH(ex.extract(few, bad, rng, out),
+                    "rangenav: PlaneExtractor::extract: argument 'cluster index' = 10 must be < "
+                    "points.size() = 10");
+  PlaneExtractionParams wrong;
+  wrong.min_inliers = 2;
+  CHECK_THROWS_WITH(PlaneExtractor{wrong},
+                    "rangenav: PlaneExtractor: argument 'params.min_inliers' = 2 must be >= 3");
+  wrong = {};
+  wrong.confidence = 1.0;
+  CHECK_THROWS_WITH(PlaneExtractor{wrong},
+                    "rangenav: PlaneExtractor: argument 'params.confidence' = 1 must be in (0, 1)");
+}
