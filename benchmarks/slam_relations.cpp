@@ -4,11 +4,13 @@
 //   bench_slam_relations TRAJECTORY RELATIONS   evaluates a trajectory file (`t x y theta`, e.g.
 //                                               03_slam_carmen's trajectory.txt) and exits;
 //   bench_slam_relations [benchmark flags]      maps ../shared/data/carmen/mit-csail.clf.gz with
-//                                               IncrementalMapper<2> (one thread, no loop
-//                                               closure), prints the errors against
-//                                               slam-benchmark/mit-csail.relations (all, short
-//                                               < 2 s, long), the sparse-map size, then times the
-//                                               whole log per iteration (scans per second).
+//                                               IncrementalMapper<2> in the papers' setup and
+//                                               LaserSlamMapper with laser_slam_params() (one
+//                                               thread, no loop closure), prints the errors
+//                                               against slam-benchmark/mit-csail.relations (all,
+//                                               short < 2 s, long), the sparse-map sizes, then
+//                                               times the whole log per iteration (scans per
+//                                               second) for both.
 
 #include <benchmark/benchmark.h>
 
@@ -45,8 +47,8 @@ struct Run {
   std::size_t map_points = 0, offered = 0, memory = 0, rejected = 0;
 };
 
-Run map_log(const std::vector<rangenav::io::CarmenLaser>& lasers) {
-  rangenav::IncrementalMapper<2> mapper;
+template <class Mapper>
+Run map_log(const std::vector<rangenav::io::CarmenLaser>& lasers, Mapper mapper) {
   Run run;
   for (const auto& laser : lasers) {
     std::optional<rangenav::Transform2d> odom;
@@ -67,19 +69,34 @@ const std::vector<rangenav::io::CarmenLaser>& csail() {
   return lasers;
 }
 
-void BM_rangenav_mapper_csail(benchmark::State& state) {
+rangenav::IncrementalMapper<2> paper_mapper() {
+  return rangenav::IncrementalMapper<2>();
+}
+rangenav::LaserSlamMapper<double> laser_mapper() {
+  return rangenav::LaserSlamMapper<double>(rangenav::laser_slam_params<double>());
+}
+
+template <class Make>
+void time_mapper(benchmark::State& state, Make make) {
   if (!std::filesystem::exists(data_dir / "carmen/mit-csail.clf.gz")) {
     state.SkipWithError("carmen/mit-csail.clf.gz not found");
     return;
   }
   const auto& lasers = csail();
   for (auto _ : state)
-    benchmark::DoNotOptimize(map_log(lasers));
+    benchmark::DoNotOptimize(map_log(lasers, make()));
   state.counters["scans_per_second"] = benchmark::Counter(
       static_cast<double>(lasers.size()) * static_cast<double>(state.iterations()),
       benchmark::Counter::kIsRate);
 }
+void BM_rangenav_mapper_csail(benchmark::State& state) {
+  time_mapper(state, paper_mapper);
+}
+void BM_rangenav_laser_mapper_csail(benchmark::State& state) {
+  time_mapper(state, laser_mapper);
+}
 BENCHMARK(BM_rangenav_mapper_csail)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_rangenav_laser_mapper_csail)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
 
@@ -99,18 +116,20 @@ int main(int argc, char** argv) {
   const auto relations = data_dir / "slam-benchmark/mit-csail.relations";
   if (std::filesystem::exists(data_dir / "carmen/mit-csail.clf.gz") &&
       std::filesystem::exists(relations)) {
-    const Run run = map_log(csail());
-    std::printf("IncrementalMapper<2> on MIT CSAIL (%zu scans, no loop closure):\n",
-                run.stamps.size());
-    print_errors(rangenav::io::evaluate_slam_relations(rangenav::io::read_slam_relations(relations),
-                                                       run.stamps, run.poses));
-    std::printf(
-        "  sparse map: %zu of %zu offered points stored (eps_D = 0.15 m), %zu bytes "
-        "(%.1f B per stored point); %zu registrations rejected\n",
-        run.map_points, run.offered, run.memory,
-        static_cast<double>(run.memory) /
-            static_cast<double>(std::max<std::size_t>(run.map_points, 1)),
-        run.rejected);
+    const auto rel = rangenav::io::read_slam_relations(relations);
+    const auto report = [&](const char* name, const Run& run) {
+      std::printf("%s on MIT CSAIL (%zu scans, no loop closure):\n", name, run.stamps.size());
+      print_errors(rangenav::io::evaluate_slam_relations(rel, run.stamps, run.poses));
+      std::printf(
+          "  sparse map: %zu of %zu offered points stored (eps_D = 0.15 m), %zu bytes "
+          "(%.1f B per stored point); %zu registrations rejected\n",
+          run.map_points, run.offered, run.memory,
+          static_cast<double>(run.memory) /
+              static_cast<double>(std::max<std::size_t>(run.map_points, 1)),
+          run.rejected);
+    };
+    report("IncrementalMapper<2> (papers' setup)", map_log(csail(), paper_mapper()));
+    report("LaserSlamMapper (laser_slam_params)", map_log(csail(), laser_mapper()));
   }
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();

@@ -387,27 +387,37 @@ namespace {
 
 struct RealRun {
   double mean_err{0}, max_err{0}, final_err{0};
+  double dead_reckoning_final_err{0};  ///< the raw odometry alone, from the same start
   std::size_t scans{0};
 };
 
-/// Standard MCL on a corrected CARMEN log: the grid comes from the corrected poses, the motion
-/// from the log's raw ODOM records, the start from the first corrected pose disturbed by
-/// (0.3 m, -0.2 m, 0.1 rad). Errors are against the corrected poses.
-RealRun track_real_log(const std::filesystem::path& path, std::size_t scan_stride,
-                       std::size_t beam_stride, std::size_t particles) {
+/// Standard MCL on a corrected CARMEN log: the grid comes from the corrected poses (a plain
+/// occupancy grid, classify_dynamic = false), the motion from the raw odometry, the start from
+/// the first corrected pose disturbed by (0.3 m, -0.2 m, 0.1 rad); default likelihood field.
+/// Errors are against the corrected poses.
+///
+/// The raw odometry: these GMapping-corrected logs follow every FLASER with an ODOM record whose
+/// logger timestamp is 0 and whose pose is the scan's corrected pose; the ODOM records after it
+/// continue from there. Taking the last ODOM pose before each scan therefore telescopes into the
+/// corrected trajectory (its dead reckoning ends 0.14 m from the truth on Intel, 0.016 m on
+/// FR079). The raw odometry chains the increments between consecutive ODOM records and skips
+/// the jumps into the timestamp-0 records (dead reckoning then ends 36.7 m / 45.6 m off).
+RealRun track_real_log(const std::filesystem::path& path, std::size_t particles) {
   io::CarmenReader reader(path, io::CarmenReaderOptions{.range_max = 81.0});
   std::vector<io::CarmenLaser> lasers;
-  std::vector<Pose2d> odometry;  // the last ODOM pose before each laser
-  Pose2d odom{};
-  bool have_odom = false;
+  std::vector<Pose2d> odometry;  // the raw odometry at each laser
+  Pose2d raw{}, last_record{};
+  bool have_record = false;
   while (auto record = reader.next()) {
     if (const auto* o = std::get_if<io::CarmenOdometry>(&*record)) {
-      odom = o->pose;
-      have_odom = true;
+      if (have_record && o->logger_timestamp != 0.0)
+        raw = compose(raw, relative(last_record, o->pose));
+      last_record = o->pose;
+      have_record = true;
     } else if (auto* l = std::get_if<io::CarmenLaser>(&*record)) {
-      if (!have_odom || !l->laser_pose) continue;
+      if (!have_record || !l->laser_pose) continue;
       lasers.push_back(std::move(*l));
-      odometry.push_back(odom);
+      odometry.push_back(raw);
     }
   }
   REQUIRE(lasers.size() > 100);
@@ -418,14 +428,12 @@ RealRun track_real_log(const std::filesystem::path& path, std::size_t scan_strid
   }
   OccupancyGridParams gp;
   gp.resolution = 0.1;
+  gp.classify_dynamic = false;
   OccupancyGrid grid = OccupancyGrid::covering(lo, hi, 15.0, gp);
   for (const auto& l : lasers)
     grid.integrate(*l.laser_pose, l.scan);
   LikelihoodFieldParams lp;
-  lp.sigma_hit = 0.05;
   lp.range_max = 81.0;
-  lp.beam_stride = beam_stride;
-  lp.max_beams = 0;  // every beam_stride-th beam: sigma_hit 0.05 m with 90 beams tracks here
   MclParams mp;
   mp.min_particles = particles;
   mp.max_particles = particles;
@@ -441,14 +449,15 @@ RealRun track_real_log(const std::filesystem::path& path, std::size_t scan_strid
   LikelihoodFieldModel::Observation z;
   RealRun run;
   double sum = 0;
-  std::size_t prev = 0;
-  for (std::size_t i = 0; i < lasers.size(); i += scan_stride) {
+  Pose2d dead = first;
+  for (std::size_t i = 0; i < lasers.size(); ++i) {
+    const OdometryReading u{odometry[i == 0 ? 0 : i - 1], odometry[i]};
+    dead = compose(dead, relative(u.previous, u.current));
     mcl.sensor_model().prepare(lasers[i].scan, Pose2d{}, z);
-    mcl.update(OdometryReading{odometry[prev], odometry[i]}, z, rng);
-    prev = i;
+    mcl.update(u, z, rng);
     const Pose2d e = mcl.estimate();
     const double err = (e.position() - lasers[i].laser_pose->position()).norm();
-    if (i >= 20 * scan_stride) {  // after the start-up transient
+    if (i >= 20) {  // after the start-up transient
       sum += err;
       ++run.scans;
       run.max_err = std::max(run.max_err, err);
@@ -456,19 +465,36 @@ RealRun track_real_log(const std::filesystem::path& path, std::size_t scan_strid
     run.final_err = err;
   }
   run.mean_err = sum / static_cast<double>(run.scans);
+  run.dead_reckoning_final_err = (dead.position() - lasers.back().laser_pose->position()).norm();
   return run;
 }
 
 }  // namespace
 
 TEST_CASE("mcl: tracking on the corrected Intel log from raw odometry", "[localization][data]") {
-  {
-    const auto path = test::data_file_or_skip("carmen_corrected/intel-corrected.log.gz");
-    if (path.empty()) return;
-    const RealRun r = track_real_log(path, 1, 2, 1000);
-    WARN("intel: MCL vs corrected poses over " << r.scans << " scans: mean " << r.mean_err
-                                               << " m, max " << r.max_err << " m");
-    CHECK(r.mean_err < 0.15);
-    CHECK(r.final_err < 0.3);
-  }
+  const auto path = test::data_file_or_skip("carmen_corrected/intel-corrected.log.gz");
+  if (path.empty()) return;
+  const RealRun r = track_real_log(path, 1000);
+  WARN("intel: MCL vs corrected poses over "
+       << r.scans << " scans: mean " << r.mean_err << " m, max " << r.max_err << " m, final "
+       << r.final_err << " m; raw odometry alone ends " << r.dead_reckoning_final_err << " m off");
+  CHECK(r.dead_reckoning_final_err > 10.0);  // the odometry really is raw
+  CHECK(r.mean_err < 0.15);
+  CHECK(r.final_err < 0.3);
+}
+
+// FR079 (issue 8): slow (4791 scans of 360 beams), hidden; run with
+// `test_localization "[fr079]"`. GMapping stored each scan's pose from the filter as it was at
+// the time, so revisited areas disagree: around scans 1100-1225 a map of scans 1050-1250 alone
+// puts the scans' end points 0.04-0.10 m from its walls, the map of all scans 0.4-0.95 m. Even
+// fed with the corrected increments as odometry, MCL leaves the corrected poses there.
+TEST_CASE("mcl: tracking on the corrected FR079 log from raw odometry", "[.][fr079][data]") {
+  const auto path = test::data_file_or_skip("carmen_corrected/freiburg-079-corrected.log.gz");
+  if (path.empty()) return;
+  const RealRun r = track_real_log(path, 1000);
+  WARN("fr079: MCL vs corrected poses over "
+       << r.scans << " scans: mean " << r.mean_err << " m, max " << r.max_err << " m, final "
+       << r.final_err << " m; raw odometry alone ends " << r.dead_reckoning_final_err << " m off");
+  CHECK(r.dead_reckoning_final_err > 10.0);
+  CHECK(r.mean_err < 2.0);
 }

@@ -188,6 +188,23 @@ TEST_CASE("occupancy grid: transient cells make readings dynamic; vanished cells
   REQUIRE(d.dynamic_points.size() == 1);
   CHECK(d.dynamic_points[0].isApprox(Point2d(1.55, 1.05)));
   CHECK(g.log_odds_at({15, 10}) == before);
+  // Without the classification (classify_dynamic = false) the cell is still marked transient,
+  // but the same reading is static and maps its cell.
+  {
+    OccupancyGridParams plain = p;
+    plain.classify_dynamic = false;
+    OccupancyGrid h({0, 0}, 80, 20, plain);
+    for (int k = 0; k < 8; ++k)
+      for (const double y : {0.95, 1.05, 1.15})
+        h.integrate(Pose2d{0.05, y, 0}, one_beam(3.0));
+    REQUIRE(h.is_transient({15, 10}));
+    const double free_before = h.log_odds_at({15, 10});
+    const ScanClassification e = h.integrate(Pose2d{0.05, 1.05, 0}, one_beam(1.5));
+    CHECK(e.static_beams == std::vector<std::uint32_t>{0});
+    CHECK(e.dynamic_beams.empty());
+    CHECK(e.dynamic_points.empty());
+    CHECK(h.log_odds_at({15, 10}) > free_before);
+  }
   // A reading in a free but not transient cell is static.
   CHECK(g.integrate(Pose2d{0.05, 1.15, 0}, one_beam(1.5)).static_beams.size() == 1);
   // The "wall" goes away: beams pass through the seen-occupied cells until they turn free; the

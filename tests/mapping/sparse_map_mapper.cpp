@@ -203,3 +203,69 @@ TEST_CASE("IncrementalMapper works unchanged in 3D (6-DOF) with voxel filtering"
     }
   }
 }
+
+TEST_CASE("SparsePointMap keeps the normals of its walls", "[mapping]") {
+  SparsePointMapParams<double> params;
+  params.normals = true;
+  SparsePointMap<2> map(params);
+  // Two batches, so the second refreshes the normals of the first one's neighbours.
+  const auto world = test::room_2d(0.02);
+  const std::vector<Eigen::Vector2d> first(world.begin(), world.begin() + world.size() / 2);
+  const std::vector<Eigen::Vector2d> second(world.begin() + world.size() / 2, world.end());
+  map.insert(first);
+  map.insert(second);
+  REQUIRE(map.normals().size() == map.size());
+  std::size_t checked = 0;
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    const Eigen::Vector2d p = map.points()[i], n = map.normals()[i];
+    if (n.squaredNorm() > 0) CHECK(n.norm() == Approx(1.0));
+    // Points of the bottom wall y = -2 and the left wall x = -3, away from corners and the box.
+    if (std::abs(p.y() + 2) < 1e-9 && p.x() > -2.4 && p.x() < 4.4) {
+      CHECK(std::abs(n.y()) > 0.999);
+      ++checked;
+    }
+    if (std::abs(p.x() + 3) < 1e-9 && p.y() > -1.4 && p.y() < 2.4) {
+      CHECK(std::abs(n.x()) > 0.999);
+      ++checked;
+    }
+  }
+  CHECK(checked > 50);
+  CHECK(SparsePointMap<2>().normals().empty());
+  params.normal_neighbors = 1;
+  CHECK_THROWS_WITH(SparsePointMap<2>(params),
+                    "rangenav: SparsePointMap: argument 'normal_neighbors' = 1 must be >= 2");
+}
+
+TEST_CASE("LaserSlamMapper tracks through odometry that freezes and then jumps", "[mapping]") {
+  const auto world = test::room_2d(0.02);
+  std::mt19937 rng(21);
+  const auto run = [&](IncrementalMapperParams<double> params) {
+    LaserSlamMapper<double> mapper(params);
+    Pose2d truth{-1.5, 0.5, 0.0}, odom = truth, first{};
+    double max_error = 0;
+    for (int i = 0; i < 40; ++i) {
+      const Pose2d step = i < 20 ? Pose2d{0.06, 0.0, 0.25} : Pose2d{0.06, 0.0, -0.25};
+      truth = compose(truth, step);
+      // Odometry freezes for scans 10-13 and then reports the whole motion at once.
+      if (i < 10 || i > 13) odom = compose(odom, Pose2d{step.x * 1.03, 0.0, step.theta + 0.005});
+      if (i == 14)
+        for (int k = 0; k < 4; ++k)
+          odom = compose(odom, Pose2d{step.x, 0.0, step.theta});
+      if (i == 0) first = truth;
+      auto scan = view_2d(world, truth);
+      test::add_noise<2>(scan, 0.005, rng);
+      const auto update = mapper.process(scan, odom.to_isometry());
+      const Pose2d estimate = Pose2d::from_isometry(update.pose);
+      const Pose2d expected = relative(first, truth);
+      max_error = std::max(max_error, std::hypot(estimate.x - expected.x, estimate.y - expected.y));
+    }
+    return max_error;
+  };
+  const auto params = laser_slam_params<double>();
+  CHECK(run(params) < 0.03);
+  auto odometry_only = params;
+  odometry_only.hypothesis_distance = odometry_only.hypothesis_angle = 1e9;
+  CHECK(run(odometry_only) > 0.3);  // the odometry guess alone is off by the frozen motion
+  CHECK(LaserSlamMapper<double>::uses_normals);
+  CHECK_FALSE(IncrementalMapper<2>::uses_normals);
+}

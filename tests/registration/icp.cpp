@@ -12,6 +12,7 @@
 #include "rangenav/io/ply.hpp"
 #include "rangenav/registration/frustum.hpp"
 #include "rangenav/registration/icp.hpp"
+#include "rangenav/registration/point_to_line_solver.hpp"
 #include "rangenav/registration/point_to_point_solver.hpp"
 #include "rangenav/registration/rejectors.hpp"
 #include "rangenav/search/kd_tree.hpp"
@@ -34,6 +35,8 @@ static_assert(!CorrespondenceRejector<int, 2, double>);
 static_assert(!CorrespondenceRejector<FrustumRejector<3, double>, 2, double>);
 static_assert(TransformSolver<PointToPointSolver<2, double>, 2, double>);
 static_assert(TransformSolver<PointToPointSolver<3, float>, 3, float>);
+static_assert(TransformSolver<PointToLineSolver<double>, 2, double>);
+static_assert(TransformSolver<PointToLineSolver<float>, 2, float>);
 
 namespace {
 
@@ -79,6 +82,67 @@ TEST_CASE("2D closed-form solver recovers a known transform exactly", "[registra
     CHECK(et < 1e-9);
     CHECK(er < 1e-9);
   }
+}
+
+TEST_CASE("point-to-line solver: exact on lines, indifferent to sliding along them",
+          "[registration]") {
+  // Model: points on the four walls of a 4 m x 3 m room with their wall normals. Data: the
+  // same wall points seen through a known transform, each paired with a model point that lies
+  // up to 0.3 m away ALONG its wall (what a sparse map gives). Point-to-point is biased by the
+  // sliding; point-to-line recovers the transform exactly.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> along(-0.3, 0.3), u(0.0, 1.0);
+  std::vector<Eigen::Vector2d> model_points, normals;
+  std::vector<Correspondence<2, double>> pairs;
+  const auto truth = make_transform2(0.4, -0.25, 0.2);
+  const Transform2d to_data = truth.inverse(Eigen::Isometry);
+  const Eigen::Vector2d corners[4] = {{-2, -1.5}, {2, -1.5}, {2, 1.5}, {-2, 1.5}};
+  for (int wall = 0; wall < 4; ++wall) {
+    const Eigen::Vector2d a = corners[wall], b = corners[(wall + 1) % 4];
+    const Eigen::Vector2d dir = (b - a).normalized(), normal(-dir.y(), dir.x());
+    for (int k = 0; k < 25; ++k) {
+      const Eigen::Vector2d on_wall = a + (b - a) * u(rng);
+      const Eigen::Vector2d m = on_wall + dir * along(rng);
+      const auto index = static_cast<std::uint32_t>(model_points.size());
+      model_points.push_back(m);
+      normals.push_back(k % 5 == 4 ? Eigen::Vector2d::Zero() : normal);  // some without a line
+      pairs.push_back({to_data * on_wall, m, 0.0, index, index});
+    }
+  }
+  PointToLineSolver<double> solver;
+  solver.model_normals = normals;
+  const auto t = solver.solve(pairs);
+  REQUIRE(t);
+  // The pairs without a normal pull point-to-point; those with one fix the pose exactly.
+  std::vector<Correspondence<2, double>> lines;
+  for (const auto& c : pairs)
+    if (normals[c.model_index].squaredNorm() > 0) lines.push_back(c);
+  const auto exact = solver.solve(lines);
+  REQUIRE(exact);
+  const auto [et, er] = transform_error<2>(*exact, truth);
+  CHECK(et < 1e-9);
+  CHECK(er < 1e-9);
+  const auto p2p = PointToPointSolver<2, double>{}.solve(lines);
+  REQUIRE(p2p);
+  CHECK(transform_error<2>(*p2p, truth).first > 1e-3);
+  // With every normal zero (or none given) it is the point-to-point solver.
+  PointToLineSolver<double> no_normals;
+  const auto same = no_normals.solve(lines);
+  REQUIRE(same);
+  CHECK(same->isApprox(*p2p));
+  // Too few pairs / identical data points: no transform.
+  CHECK_FALSE(solver.solve(std::span(lines).first(2)).has_value());
+  std::vector<Correspondence<2, double>> identical(5, lines.front());
+  CHECK_FALSE(solver.solve(identical).has_value());
+  // Along a corridor (two parallel walls) the axis is unconstrained: the damping keeps the
+  // point-to-point position there and the answer stays finite.
+  std::vector<Correspondence<2, double>> corridor;
+  for (const auto& c : lines)
+    if (std::abs(normals[c.model_index].y()) > 0.5) corridor.push_back(c);
+  const auto along_axis = solver.solve(corridor);
+  REQUIRE(along_axis);
+  CHECK(along_axis->matrix().allFinite());
+  CHECK(std::abs(along_axis->translation().y() - truth.translation().y()) < 1e-6);
 }
 
 TEST_CASE("3D SVD solver recovers rotations and never returns a reflection", "[registration]") {

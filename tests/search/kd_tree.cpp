@@ -4,6 +4,7 @@
 #include <random>
 #include <vector>
 
+#include "rangenav/search/grid_index.hpp"
 #include "rangenav/search/kd_tree.hpp"
 #include "rangenav/search/nearest_neighbor_search.hpp"
 
@@ -18,6 +19,8 @@ static_assert(NearestNeighborSearch<KdTree<3, double>>);
 static_assert(NearestNeighborSearch<KdTree<3, float>>);
 static_assert(NearestNeighborSearch<GrowingKdTree<2, double>>);
 static_assert(NearestNeighborSearch<GrowingKdTree<3, float>>);
+static_assert(NearestNeighborSearch<GridIndex2<double>>);
+static_assert(NearestNeighborSearch<GridIndex2<float>>);
 static_assert(!NearestNeighborSearch<std::vector<Eigen::Vector2d>>);
 static_assert(!NearestNeighborSearch<int>);
 
@@ -132,6 +135,41 @@ TEST_CASE("GrowingKdTree matches brute force while growing", "[search]") {
   growing_tree_case<2, float>();
   growing_tree_case<3, double>();
   growing_tree_case<3, float>();
+}
+
+TEST_CASE("GridIndex2 matches brute force while growing, with and without overflow", "[search]") {
+  const auto run = [](auto scalar, std::size_t max_cells, double cell) {
+    using S = decltype(scalar);
+    std::mt19937 rng(11);
+    GridIndex2<S> grid(GridIndexParams<S>{static_cast<S>(cell), max_cells});
+    std::vector<Point<2, S>> all;
+    for (int round = 0; round < 8; ++round) {
+      // Batches spread outwards, so the array grows several times.
+      const auto pts = random_points<2, S>(150, rng, S(2 + 2 * round));
+      REQUIRE(grid.insert(pts) == pts.size());
+      all.insert(all.end(), pts.begin(), pts.end());
+      if (round % 3 == 2) check_against_brute_force(grid, BruteForceSearch<2, S>(all), rng, S(16));
+    }
+    for (std::size_t i = 0; i < all.size(); ++i)
+      REQUIRE(grid.point(i) == all[i]);
+    check_against_brute_force(grid, BruteForceSearch<2, S>(all), rng, S(16));
+    CHECK(grid.memory_bytes() >= all.size() * sizeof(Point<2, S>));
+  };
+  run(double{}, std::size_t(1) << 24, 0.25);
+  run(float{}, std::size_t(1) << 24, 0.5);
+  run(double{}, 400, 0.25);  // most points overflow the capped array
+  run(double{}, 1, 3.0);     // no array at all: every point in the overflow list
+
+  GridIndex2<double> grid;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  CHECK(grid.insert(std::vector<Eigen::Vector2d>{{0, 0}, {nan, 1}, {1e9, 0}}) == 2);
+  CHECK_FALSE(grid.insert_point({nan, 0}));
+  REQUIRE(grid.nearest({1e9 - 1, 0}));
+  CHECK(grid.nearest({1e9 - 1, 0})->index == 1);
+  CHECK_FALSE(grid.nearest({0.5, 0}, 0.2).has_value());
+  CHECK_FALSE(GridIndex2<double>().nearest({0, 0}).has_value());
+  CHECK_THROWS_WITH(GridIndex2<double>(GridIndexParams<double>{0.0}),
+                    "rangenav: GridIndex: argument 'cell_size' = 0 must be finite and > 0");
 }
 
 TEST_CASE("kd-trees skip non-finite points and map back to the source index", "[search]") {

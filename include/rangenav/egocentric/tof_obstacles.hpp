@@ -182,9 +182,29 @@ class HeightImageObstacleDetector {
         m[c] = v;
       }
     }
-    const Scalar radius_sq = params_.window_radius * params_.window_radius;
+    // A lower bound of every W: the minimum over the whole column window of +-window_steps rows
+    // (van Herk / Gil-Werman: prefix and suffix minima over blocks of 2 steps + 1 rows, three
+    // comparisons per pixel). A point not more than ε_H above it is no obstacle, and the exact
+    // walk along the column, which stops where the points leave window_radius, is skipped.
     const auto steps = static_cast<std::ptrdiff_t>(params_.window_steps);
     const auto hh = static_cast<std::ptrdiff_t>(h);
+    const std::size_t block = 2 * params_.window_steps + 1;
+    prefix_.resize(n);
+    suffix_.resize(n);
+    for (std::size_t r0 = 0; r0 < h; r0 += block) {
+      const std::size_t r1 = std::min(r0 + block, h);
+      for (std::size_t c = 0; c < w; ++c)
+        prefix_[r0 * w + c] = zc_[r0 * w + c];
+      for (std::size_t r = r0 + 1; r < r1; ++r)
+        for (std::size_t c = 0; c < w; ++c)
+          prefix_[r * w + c] = std::min(prefix_[(r - 1) * w + c], zc_[r * w + c]);
+      for (std::size_t c = 0; c < w; ++c)
+        suffix_[(r1 - 1) * w + c] = zc_[(r1 - 1) * w + c];
+      for (std::size_t r = r1 - 1; r-- > r0;)
+        for (std::size_t c = 0; c < w; ++c)
+          suffix_[r * w + c] = std::min(suffix_[(r + 1) * w + c], zc_[r * w + c]);
+    }
+    const Scalar radius_sq = params_.window_radius * params_.window_radius;
     for (std::size_t r = 0; r < h; ++r)
       for (std::size_t c = 0; c < w; ++c) {
         const std::size_t i = r * w + c;
@@ -203,6 +223,16 @@ class HeightImageObstacleDetector {
         // more than ε_H above the lowest point of W?
         const Scalar threshold = z - params_.epsilon_h;
         Scalar lo = moore_[i];
+        if (!(lo < threshold)) {
+          // The column window [r - steps, r + steps] clamped to the image spans at most two
+          // blocks: its minimum is min(suffix at its top, prefix at its bottom).
+          const std::size_t top = r > params_.window_steps ? r - params_.window_steps : 0;
+          const std::size_t bottom = std::min(r + params_.window_steps, h - 1);
+          const Scalar bound = top / block == bottom / block
+                                   ? column_min(top, bottom, c, w)
+                                   : std::min(suffix_[top * w + c], prefix_[bottom * w + c]);
+          if (!(bound < threshold)) continue;  // flat within ε_H: no obstacle
+        }
         for (int dir = -1; dir <= 1 && !(lo < threshold); dir += 2)
           for (std::ptrdiff_t k = 2; k <= steps; ++k) {
             const std::ptrdiff_t rr = static_cast<std::ptrdiff_t>(r) + dir * k;
@@ -220,6 +250,15 @@ class HeightImageObstacleDetector {
       }
     build_virtual_scan(w, yaw, fov);
     return obstacle_points_.size();
+  }
+
+  // The minimum of zc_ over rows [top, bottom] of column c when both lie in one block (only at
+  // the image's last, shorter block or when the window is clamped).
+  Scalar column_min(std::size_t top, std::size_t bottom, std::size_t c, std::size_t w) const {
+    Scalar v = zc_[top * w + c];
+    for (std::size_t r = top + 1; r <= bottom; ++r)
+      v = std::min(v, zc_[r * w + c]);
+    return v;
   }
 
   // The body-frame ray of every pixel, scaled so that depth * ray is the point; recomputed only
@@ -258,7 +297,7 @@ class HeightImageObstacleDetector {
   PinholeIntrinsics<Scalar> rays_for_{};
   DepthKind rays_kind_{DepthKind::radial};
   std::vector<Point<3, Scalar>> points_;
-  std::vector<Scalar> zc_, x_, y_, moore_, col_;
+  std::vector<Scalar> zc_, x_, y_, moore_, col_, prefix_, suffix_;
   std::vector<std::uint8_t> obstacle_;
   std::vector<Point<3, Scalar>> obstacle_points_;
   ScanGeometry<Scalar> scan_geometry_{};

@@ -58,6 +58,11 @@ struct OccupancyGridParams {
   double seen_occupied_probability{0.9};  ///< above it a cell is seen-occupied
   int transient_neighborhood{2};          ///< cells: no cell this close may lean occupied (>= 0)
   double occupied_probability{0.5};       ///< is_occupied(): probability above this
+  /// false: integrate() maps every valid reading (plain occupancy mapping, no dynamic readings).
+  /// For a map to localize in, built from poses that are only approximately consistent (e.g. a
+  /// SLAM-corrected log revisiting its corridors): there, a wall seen free from a slightly
+  /// misaligned pass turns transient and its later readings would be discarded as dynamic.
+  bool classify_dynamic{true};
 
   void validate(std::string_view where) const {
     detail::require_positive(where, "resolution", resolution);
@@ -263,7 +268,7 @@ class OccupancyGrid {
       const Point2d p(origin.x() + c * double(q.x()) - s * double(q.y()),
                       origin.y() + s * double(q.x()) + c * double(q.y()));
       const Index cell = cell_of(p);
-      if (contains(cell) && is_transient(cell)) {
+      if (params_.classify_dynamic && contains(cell) && is_transient(cell)) {
         out.dynamic_beams.push_back(i);
         out.dynamic_points.push_back(p);
       } else {

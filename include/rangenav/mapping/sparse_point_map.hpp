@@ -2,27 +2,37 @@
 // Sparse point maps (paper 000 §3.3, Eq. (5); paper 002 §6.3, Eq. (12)): a registered point is
 // added to the map only when no stored point lies within eps_D of it,
 //   M_i = M_{i-1} ∪ { d | d ∈ D_i, ∄ m ∈ M_{i-1} : |d - m| < eps_D },
-// which bounds the point density of the map. The test runs on the same kd-tree the ICP searches
-// (a GrowingKdTree, so the map is directly an ICP model).
+// which bounds the point density of the map. The test runs on the same index the ICP searches
+// (a GridIndex2 in 2D, a GrowingKdTree in 3D, or the `Index` given), so the map is directly an
+// ICP model.
 //
 // Eq. (5) only compares with the map before the scan; by default the new points are also
 // thinned among themselves (deduplicate_within_scan), so that one dense scan does not store
 // several points per eps_D ball. Set it to false for the literal Eq. (5).
 //
+// With `normals` set, the map also keeps a unit normal per stored point (PCA of its
+// `normal_neighbors` nearest map points within `normal_radius`; zero when they do not form a line
+// / plane: smallest / largest eigenvalue above `max_flatness`), refreshed for every point whose
+// neighbourhood an insertion changed. PointToLineSolver uses them (an option beyond the papers).
+//
 // Memory: one stored point costs sizeof(Point<D, Scalar>) (16 B in 2D, 24 B in 3D for double)
 // plus the kd-tree's index (4 B) and nodes (about 2 nodes of ~40-60 B per 10-point leaf), i.e.
 // about 30 B per point in 2D; memory_bytes() reports the exact figure.
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
+#include <string_view>
+#include <type_traits>
 #include <unordered_map>
 #include <vector>
 
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/point_cloud.hpp"
 #include "rangenav/core/types.hpp"
+#include "rangenav/search/grid_index.hpp"
 #include "rangenav/search/kd_tree.hpp"
 
 namespace rangenav {
@@ -31,9 +41,24 @@ template <std::floating_point Scalar = double>
 struct SparsePointMapParams {
   Scalar epsilon_d = Scalar(0.15);  ///< m, eps_D of Eq. (5); paper 000 Fig. 3 uses 15 cm
   bool deduplicate_within_scan = true;
-  KdTreeParams tree{};
+  KdTreeParams tree{};                 ///< of a GrowingKdTree index
+  GridIndexParams<Scalar> grid{};      ///< of a GridIndex2 index
+  bool normals = false;                ///< keep a normal per stored point (see above)
+  std::size_t normal_neighbors = 5;    ///< k of the normals' PCA
+  Scalar normal_radius = Scalar(0.5);  ///< m, neighbours farther away are not used
+  Scalar max_flatness = Scalar(0.1);   ///< eigenvalue ratio above which the normal is zero
 
-  void validate() const { detail::require_positive("SparsePointMap", "epsilon_d", epsilon_d); }
+  void validate() const {
+    constexpr std::string_view where = "SparsePointMap";
+    detail::require_positive(where, "epsilon_d", epsilon_d);
+    grid.validate();
+    if (normals) {
+      if (normal_neighbors < static_cast<std::size_t>(2))
+        detail::throw_invalid_argument(where, "normal_neighbors", normal_neighbors, "must be >= 2");
+      detail::require_positive(where, "normal_radius", normal_radius);
+      detail::require_non_negative(where, "max_flatness", max_flatness);
+    }
+  }
 };
 
 /// What one insertion did.
@@ -42,19 +67,23 @@ struct SparseInsertStats {
   std::size_t stored = 0;   ///< points added to the map
 };
 
-template <int D, std::floating_point Scalar = double>
+/// The default map index: the 2D grid in 2D (faster on laser maps, see grid_index.hpp), the
+/// growing kd-tree in 3D.
+template <int D, class Scalar>
+using DefaultMapIndex = std::conditional_t<D == 2, GridIndex2<Scalar>, GrowingKdTree<D, Scalar>>;
+
+template <int D, std::floating_point Scalar = double, class Index = DefaultMapIndex<D, Scalar>>
 class SparsePointMap {
  public:
   static constexpr int dimension = D;
   using scalar_type = Scalar;
+  using index_type = Index;
   using point_type = Point<D, Scalar>;
   using transform_type = Transform<D, Scalar>;
 
   /// Throws invalid_argument when epsilon_d is not finite and > 0.
   explicit SparsePointMap(SparsePointMapParams<Scalar> params = {})
-      : params_(params), tree_(params.tree) {
-    params_.validate();
-  }
+      : params_((params.validate(), params)), tree_(make_index(params)) {}
 
   /// Transforms the points of `cloud` by `pose` (cloud frame -> map frame) and stores those with
   /// no map point within eps_D (Eq. (5)). Throws invalid_argument for a non-rigid pose.
@@ -76,14 +105,21 @@ class SparsePointMap {
     }
     if (params_.deduplicate_within_scan) thin_candidates(eps_sq);
     stats.stored = candidates_.size();
-    if (!candidates_.empty()) tree_.insert(candidates_);
+    if (!candidates_.empty()) {
+      const std::size_t before = tree_.size();
+      tree_.insert(candidates_);
+      if (params_.normals) update_normals(before);
+    }
     offered_ += stats.offered;
     return stats;
   }
 
   /// The map as a search structure (an ICP model).
-  [[nodiscard]] const GrowingKdTree<D, Scalar>& search() const { return tree_; }
+  [[nodiscard]] const Index& search() const { return tree_; }
   [[nodiscard]] const std::vector<point_type>& points() const { return tree_.points(); }
+  /// Unit normals of the stored points (zero where there is no line / plane), indexed like
+  /// points(); empty unless SparsePointMapParams::normals.
+  [[nodiscard]] const std::vector<point_type>& normals() const { return normals_; }
   [[nodiscard]] std::size_t size() const { return tree_.size(); }
   [[nodiscard]] bool empty() const { return tree_.empty(); }
   /// Finite points offered to insert() so far.
@@ -93,6 +129,52 @@ class SparsePointMap {
   [[nodiscard]] const SparsePointMapParams<Scalar>& params() const { return params_; }
 
  private:
+  static Index make_index(const SparsePointMapParams<Scalar>& p) {
+    if constexpr (std::is_constructible_v<Index, GridIndexParams<Scalar>>)
+      return Index(p.grid);
+    else if constexpr (std::is_constructible_v<Index, KdTreeParams>)
+      return Index(p.tree);
+    else
+      return Index();
+  }
+
+  // Normals of the new points [first, size) and of every stored point within normal_radius of
+  // one (their k nearest neighbours may have changed).
+  void update_normals(std::size_t first) {
+    const Scalar radius_sq = params_.normal_radius * params_.normal_radius;
+    normals_.resize(tree_.size(), point_type::Zero());
+    dirty_.assign(tree_.size(), 0);
+    for (std::size_t i = first; i < tree_.size(); ++i) {
+      tree_.radius(tree_.point(i), radius_sq, neighbors_);
+      for (const auto& nb : neighbors_)
+        dirty_[nb.index] = 1;
+      dirty_[i] = 1;
+    }
+    for (std::size_t i = 0; i < tree_.size(); ++i)
+      if (dirty_[i] != 0) normals_[i] = normal_at(tree_.point(i), radius_sq);
+  }
+
+  point_type normal_at(const point_type& q, Scalar radius_sq) {
+    const std::size_t k = tree_.knn(q, params_.normal_neighbors, neighbors_, radius_sq);
+    if (k < static_cast<std::size_t>(D)) return point_type::Zero();
+    point_type mean = point_type::Zero();
+    for (const auto& nb : neighbors_)
+      mean += tree_.point(nb.index);
+    mean /= static_cast<Scalar>(k);
+    Eigen::Matrix<Scalar, D, D> cov = Eigen::Matrix<Scalar, D, D>::Zero();
+    for (const auto& nb : neighbors_) {
+      const point_type d = tree_.point(nb.index) - mean;
+      cov.noalias() += d * d.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, D, D>> eig;
+    eig.computeDirect(cov);
+    const auto& values = eig.eigenvalues();
+    if (!(values(D - 1) > Scalar(0)) || values(0) > params_.max_flatness * values(D - 1))
+      return point_type::Zero();
+    const point_type n = eig.eigenvectors().col(0).normalized();
+    return n.allFinite() ? n : point_type::Zero();
+  }
+
   // Greedy thinning of the candidates among themselves on a hashed grid of cell eps_D: a
   // candidate is kept when no kept candidate in the 3^D surrounding cells is within eps_D.
   void thin_candidates(Scalar eps_sq) {
@@ -140,11 +222,14 @@ class SparsePointMap {
   }
 
   SparsePointMapParams<Scalar> params_;
-  GrowingKdTree<D, Scalar> tree_;
+  Index tree_;
   std::size_t offered_ = 0;
   std::vector<point_type> candidates_, kept_;
   std::unordered_map<std::uint64_t, std::uint32_t> grid_;
   std::vector<std::uint32_t> next_;
+  std::vector<point_type> normals_;
+  std::vector<unsigned char> dirty_;
+  std::vector<Neighbor<Scalar>> neighbors_;
 };
 
 }  // namespace rangenav

@@ -201,32 +201,30 @@ class JumpEdgeFilter {
     const Scalar ce = -std::cos(params_.epsilon_theta);  // > 0
     const Scalar ce_sq = ce * ce;
     constexpr unsigned char behind = 1, in_front = 2;
-    for (std::size_t r = 0; r < h; ++r)
-      for (std::size_t c = 0; c < w; ++c) {
-        const std::size_t i = r * w + c;
-        const Scalar a = radial_[i];
-        if (a == Scalar(0)) continue;
-        for (int k = 0; k < 4; ++k) {
-          const auto [dr, dc] = offsets_[k];
-          const std::ptrdiff_t rr = static_cast<std::ptrdiff_t>(r) + dr;
-          const std::ptrdiff_t cc = static_cast<std::ptrdiff_t>(c) + dc;
-          if (rr >= static_cast<std::ptrdiff_t>(h) || cc < 0 ||
-              cc >= static_cast<std::ptrdiff_t>(w))
-            continue;
-          const std::size_t j = static_cast<std::size_t>(rr) * w + static_cast<std::size_t>(cc);
+    // One pass per neighbour direction over the pixels that have that neighbour, so the inner
+    // loop runs over a contiguous row span without bounds tests.
+    for (int k = 0; k < 4; ++k) {
+      const auto [dr, dc] = offsets_[k];
+      const std::size_t c0 = dc < 0 ? 1 : 0, c1 = dc > 0 ? w - 1 : w;
+      const std::size_t rows = h - static_cast<std::size_t>(dr);
+      const std::ptrdiff_t off = dr * static_cast<std::ptrdiff_t>(w) + dc;
+      const Scalar* cos_phi = cos_phi_[k].data();
+      for (std::size_t r = 0; r < rows; ++r)
+        for (std::size_t c = c0; c < c1; ++c) {
+          const std::size_t i = r * w + c;
+          const Scalar a = radial_[i];
+          const std::size_t j = static_cast<std::size_t>(static_cast<std::ptrdiff_t>(i) + off);
           const Scalar b = radial_[j];
-          if (b == Scalar(0)) continue;
-          const Scalar cphi = cos_phi_[k][i];
+          if (a == Scalar(0) || b == Scalar(0)) continue;
+          const Scalar cphi = cos_phi[i];
           const Scalar dist_sq = a * a + b * b - 2 * a * b * cphi;  // |p_i - p_n|^2
           const Scalar ta = a - b * cphi;                           // |p_i - p_n| cos θ at p_i
           const Scalar tb = b - a * cphi;                           // |p_i - p_n| cos θ at p_n
           const Scalar lim = ce_sq * dist_sq;
-          if (ta < 0 && ta * ta > lim) flags_[i] |= behind;
-          if (ta > 0 && ta * ta > lim) flags_[i] |= in_front;
-          if (tb < 0 && tb * tb > lim) flags_[j] |= behind;
-          if (tb > 0 && tb * tb > lim) flags_[j] |= in_front;
+          if (ta * ta > lim) flags_[i] |= ta < 0 ? behind : in_front;
+          if (tb * tb > lim) flags_[j] |= tb < 0 ? behind : in_front;
         }
-      }
+    }
     const unsigned char jump = params_.keep_near_edges ? (behind | in_front) : behind;
     std::size_t removed = 0;
     for (std::size_t i = 0; i < n; ++i)
