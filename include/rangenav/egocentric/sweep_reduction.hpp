@@ -20,6 +20,11 @@
 //      is floor when most of its cluster is.
 // SweepReducer runs all four on a Sweep (egocentric/pitching_stream.hpp) and keeps its buffers,
 // so reducing one sweep after the other allocates nothing once the buffers have grown.
+// Paper 002 only names the four steps and refers to Surmann et al. for the details; choices of
+// ours: exact pairwise cluster distances, the split-and-merge refinement after the ratio growth,
+// the region-growing criteria of step 3 (endpoint distance to the fitted plane, proximity to and
+// direction of the plane's last line, planes reported from min_scans scans on), centroids and
+// lines labelled floor by majority, and every default value.
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
