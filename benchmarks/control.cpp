@@ -77,7 +77,7 @@ void BM_PoseControllerStep(benchmark::State& state) {
 BENCHMARK(BM_PoseControllerStep);
 
 void BM_ReactiveBehavioursScan(benchmark::State& state) {
-  const rangenav::ReactiveBehaviours behaviours;
+  rangenav::ReactiveBehaviours behaviours;
   const auto scan = corridor_scan();
   for (auto _ : state) {
     const auto cmd = behaviours.apply(0.3, 0.0, scan);

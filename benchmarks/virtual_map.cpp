@@ -4,6 +4,8 @@
 //  - BM_ToFPipeline: one 176 x 144 time-of-flight frame (SR4000 layout) through the §7.1-7.2
 //    pipeline: amplitude threshold, 3x3 median, jump-edge filter (Eq. 13-14), height-image
 //    obstacles (Eq. 15) and the virtual scan;
+//  - BM_SweepReduction: the four per-scan steps of §6.1 (cluster centroids, line segments,
+//    planes, floor classification) on one sweep of the simulated pitching scanner in a room;
 //  - BM_FastAtan2 / BM_StdAtan2: the bearing function the map uses.
 #include <benchmark/benchmark.h>
 
@@ -12,10 +14,14 @@
 #include <random>
 #include <vector>
 
+#include "rangenav/egocentric/pitching_stream.hpp"
+#include "rangenav/egocentric/sweep_reduction.hpp"
 #include "rangenav/egocentric/tof_obstacles.hpp"
 #include "rangenav/egocentric/virtual_map.hpp"
 #include "rangenav/scan/pitching.hpp"
 #include "rangenav/scan/tof_filters.hpp"
+#include "rangenav/sim/sensors.hpp"
+#include "rangenav/sim/world.hpp"
 
 namespace {
 
@@ -97,6 +103,36 @@ void BM_ToFPipeline(benchmark::State& state) {
   state.counters["obstacle_points"] = static_cast<double>(obstacles);
 }
 BENCHMARK(BM_ToFPipeline)->Unit(benchmark::kMicrosecond);
+
+// One sweep (-10 to 40 deg at 1 deg per scan, 181 beams) of a 6 x 4.5 m five-walled room.
+void BM_SweepReduction(benchmark::State& state) {
+  sim::World world;
+  const std::vector<Point2d> corners = {{0, 0}, {6, 0}, {6, 3}, {4, 4.5}, {0, 4.5}};
+  world.add_polygon(corners, 2.5);
+  world.build_index();
+  sim::PitchingScannerParams sp;
+  sp.noise.sigma = 0.005;
+  const sim::PitchingScanner scanner(sp);
+  SweepAssembler<double> sweeps(SweepParams<double>{sp.sensor_offset});
+  std::mt19937 rng(21);
+  const Pose2d pose{1.5, 2.0, 0.4};
+  std::size_t k = 0;
+  while (!sweeps.push(scanner.scan(world, pose, scanner.scan_time(k), rng), pose))
+    ++k;
+  const Sweep<double> sweep = sweeps.sweep();
+  SweepReducer<double> reducer;
+  SweepReduction<double> out;
+  for (auto _ : state) {
+    reducer.reduce(sweep, out);
+    benchmark::DoNotOptimize(out.lines.data());
+  }
+  state.counters["scans"] = static_cast<double>(sweep.scan_count());
+  state.counters["readings"] = static_cast<double>(out.input_points);
+  state.counters["reduction_ratio"] = out.reduction_ratio();
+  state.counters["lines"] = static_cast<double>(out.lines.size());
+  state.counters["planes"] = static_cast<double>(out.planes.size());
+}
+BENCHMARK(BM_SweepReduction)->Unit(benchmark::kMicrosecond);
 
 template <double (*F)(double, double)>
 void BM_Atan2(benchmark::State& state) {

@@ -90,6 +90,26 @@ TEST_CASE("reactive: behaviours scale, stop, turn, back off and bend toward free
   CHECK(cmd.stopped);
   CHECK(cmd.v == 0.0);
   CHECK(cmd.omega == Approx(-p.roadway.turn_rate));
+  // A goal-directed controller that wants to turn left keeps its sense of turn
+  // (StopTurn::commanded); without a commanded turn the free-space vote decides.
+  rangenav::ReactiveParams keep = p;
+  keep.stop_turn = rangenav::StopTurn::commanded;
+  CHECK(rangenav::ReactiveBehaviours(keep).apply(0.3, 0.4, close).omega ==
+        Approx(p.roadway.turn_rate));
+  CHECK(b.apply(0.3, 0.4, close).omega == Approx(-p.roadway.turn_rate));
+  CHECK(rangenav::ReactiveBehaviours(keep).apply(0.3, 0.0, close).omega ==
+        Approx(-p.roadway.turn_rate));
+  // Once stopped, the robot keeps its sense of turn until the roadway is free, even when the
+  // free-space vote flips (no twitching left and right on the spot).
+  rangenav::ReactiveBehaviours latch(p);
+  const std::vector<Point2d> mirrored{
+      {0.3, 0.0}, {0.3, -0.3}, {0.2, -0.5}, {0.0, -0.6}, {0.5, 5.0}};
+  CHECK(latch.apply(0.3, 0.0, close).omega == Approx(-p.roadway.turn_rate));
+  CHECK(latch.apply(0.3, 0.0, mirrored).omega == Approx(-p.roadway.turn_rate));
+  CHECK(!latch.apply(0.3, 0.0, ahead).stopped);  // free: the next stop decides anew
+  CHECK(latch.apply(0.3, 0.0, mirrored).omega == Approx(p.roadway.turn_rate));
+  latch.reset();
+  CHECK(latch.apply(0.3, 0.0, close).omega == Approx(-p.roadway.turn_rate));
   // ... or back off.
   rangenav::ReactiveParams back = p;
   back.roadway.backoff_speed = 0.1;
@@ -195,8 +215,50 @@ TEST_CASE("motor: feed-forward + PI tracks speed steps on a PT1 motor") {
     }
   }
   rangenav::MotorControllerParams bad;
+  bad.side = 0.5;
+  CHECK_THROWS_WITH(
+      rangenav::MotorController(table, bad),
+      Equals("rangenav: MotorController: argument 'params.side' = 0.5 must be +1 or -1"));
+  bad = {};
   bad.dt = 0.0;
   CHECK_THROWS_WITH(
       rangenav::MotorController(table, bad),
       Equals("rangenav: MotorController: argument 'params.dt' = 0 must be finite and > 0"));
+}
+
+TEST_CASE("motor: the F_omega feed-forward term compensates the turning friction") {
+  const auto table = measured_table();
+  // Paper 003: F_omega = 1 / pi cm.
+  CHECK(rangenav::MotorControllerParams{}.feed_forward_omega == Approx(0.01 / pi));
+  // A skid-steered wheel loses c |omega| against its turning direction while the robot turns
+  // (here c = 5 cm per rad/s): steady speed = T(pwm) - offset - side c omega.
+  const double c = 0.05, dt = 0.01;
+  for (const double side : {1.0, -1.0}) {
+    for (const double f_omega : {c, 0.0}) {
+      rangenav::MotorControllerParams params;
+      params.load_offset = 0.2;
+      params.kp = params.ki = 0.0;  // feed-forward alone
+      params.feed_forward_omega = f_omega;
+      params.side = side;
+      rangenav::MotorController control(table, params);
+      const double omega = 2.0, v_set = 1.0 + side * 0.2 * omega;  // v +- omega b / 2, b = 0.4 m
+      // Closed form: T^-1(F_v v + side F_omega omega + offset).
+      CHECK(control.feed_forward(v_set, omega) ==
+            Approx(table.pwm(v_set + side * f_omega * omega + 0.2)));
+      Pt1Motor motor;
+      for (int k = 0; k < 300; ++k) {
+        const double u = control.step(v_set, motor.v, omega);
+        const double steady = table.speed(u) - 0.2 - side * c * omega;
+        motor.v += (steady - motor.v) * (1.0 - std::exp(-dt / motor.tau));
+      }
+      INFO("side " << side << ", F_omega " << f_omega);
+      if (f_omega == c)
+        CHECK(motor.v == Approx(v_set).margin(1e-6));  // hits the set speed while turning
+      else
+        CHECK(motor.v == Approx(v_set - side * c * omega).margin(1e-6));  // misses by c omega
+    }
+  }
+  // Driving straight, the term vanishes.
+  const rangenav::MotorController straight(table);
+  CHECK(straight.feed_forward(1.0, 0.0) == Approx(table.pwm(1.0)));
 }

@@ -160,6 +160,32 @@ TEST_CASE("path tracker: a blocked segment asks for re-planning") {
   CHECK(
       tracker.segment_blocked({1.0, 0.0, pi / 2}, std::vector<Point2d>{{0.0, -1.0}, {0.0, -1.05}}));
 
+  // Around the corner: 4.5 m along the first segment is its end; 0.5 m more along the path lies
+  // 0.5 m up the second segment, within the 1.5 m lookahead from x = 4.0.
+  const Pose2d near_corner{4.0, 0.0, 0.0};
+  const std::vector<Point2d> round_corner{{1.0, 0.5}, {1.05, 0.5}};  // world (5, 0.5)
+  const auto corner = tracker.step(near_corner, round_corner);
+  CHECK(corner.replan);
+  CHECK(corner.blocked_edge == 23);
+  CHECK(!tracker.step(near_corner, std::vector<Point2d>{{1.0, 1.0}, {1.05, 1.0}}).replan);
+
+  // A Voronoi chain: 2 cm segments along x (edges 100, 101, ...). The check looks 1.5 m ahead
+  // along the path, not 2 cm, and names the edge the obstacle stands on.
+  std::vector<Point2d> chain;
+  std::vector<std::uint32_t> chain_edges;
+  for (int i = 0; i <= 250; ++i) {
+    chain.emplace_back(0.02 * i, 0.0);
+    if (i > 0) chain_edges.push_back(static_cast<std::uint32_t>(99 + i));
+  }
+  IndiveriPathTracker dense;
+  dense.set_path(LocalFramePath(chain, chain_edges));
+  const Pose2d start{0.0, 0.0, 0.0};
+  const auto ahead = dense.blocked_segment(start, std::vector<Point2d>{{1.01, 0.1}, {1.01, -0.1}});
+  REQUIRE(ahead);
+  CHECK(*ahead == 50);  // x = 1.01 lies on the segment [1.00, 1.02]
+  CHECK(dense.step(start, std::vector<Point2d>{{1.01, 0.1}, {1.01, -0.1}}).blocked_edge == 150);
+  CHECK(!dense.blocked_segment(start, std::vector<Point2d>{{1.6, 0.0}, {1.61, 0.0}}));
+
   IndiveriPathTracker empty;
   CHECK_THROWS_WITH(empty.step(pose), Equals("rangenav: IndiveriPathTracker::step: no path set"));
   CHECK_THROWS_WITH(tracker.step({NAN, 0, 0}), Equals("rangenav: IndiveriPathTracker::step: "

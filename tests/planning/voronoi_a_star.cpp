@@ -294,13 +294,21 @@ TEST_CASE("a star: start and goal attach toward each other in a corridor") {
   }
   VoronoiPathGraph graph(pts);
   AStar planner(graph);
+  AStar paper(graph, {.shortcut_ends = false});  // the attachment of §4 alone
   for (const double goal_x : {18.0, 1.0}) {
+    const auto attached = paper.plan({5.0, 1.0}, {goal_x, 1.0});
+    REQUIRE(attached.found());
+    // The first node is the one toward the goal, so the path never turns back.
+    CHECK(attached.path.waypoints[1].x() == Approx(goal_x > 5.0 ? 5.1 : 4.9));
+    CHECK(attached.path.length == Approx(std::abs(goal_x - 5.0)).margin(1e-9));
+    // shortcut_ends goes straight to the farthest node within shortcut_length (1 m): the same
+    // line, fewer nodes at each end.
     const auto result = planner.plan({5.0, 1.0}, {goal_x, 1.0});
     REQUIRE(result.found());
     const auto& wp = result.path.waypoints;
     REQUIRE(wp.size() >= 3);
-    // The first node is the one toward the goal, so the path never turns back.
-    CHECK(wp[1].x() == Approx(goal_x > 5.0 ? 5.1 : 4.9));
+    CHECK(wp.size() < attached.path.waypoints.size());
+    CHECK(wp[1].x() == Approx(goal_x > 5.0 ? 5.9 : 4.1));
     CHECK(result.path.length == Approx(std::abs(goal_x - 5.0)).margin(1e-9));
     for (const Point2d& p : wp)
       CHECK(p.y() == Approx(1.0));
@@ -327,6 +335,32 @@ TEST_CASE("a star: start and goal attach toward each other in a corridor") {
                     Equals("rangenav: AStar::plan: argument 'start' = nan 0 must be finite"));
   CHECK_THROWS_AS(planner.shortest_path(0, static_cast<index_type>(graph.node_count())),
                   rangenav::invalid_argument);
+}
+
+TEST_CASE("a star: shortcut ends never lengthen a path and keep the connection clearance") {
+  VoronoiPathGraph graph(rooms_map(3, 4.0, 0.1));
+  AStar planner(graph);
+  AStar paper(graph, {.shortcut_ends = false});
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> coord(0.5, 11.5);
+  int shortened = 0, found = 0;
+  for (int q = 0; q < 60; ++q) {
+    const Point2d start(coord(rng), coord(rng)), goal(coord(rng), coord(rng));
+    const auto a = paper.plan(start, goal), b = planner.plan(start, goal);
+    REQUIRE(a.status == b.status);
+    if (!b.found()) continue;
+    ++found;
+    CHECK(b.path.length <= a.path.length + 1e-9);
+    shortened += b.path.length < a.path.length - 1e-6 ? 1 : 0;
+    const auto& wp = b.path.waypoints;
+    for (const auto& [p, q2] : {std::pair{wp[0], wp[1]}, std::pair{wp[wp.size() - 2], wp.back()}})
+      CHECK(planner.segment_clearance(p, q2) >=
+            std::min({0.215, planner.segment_clearance(start, start),
+                      planner.segment_clearance(goal, goal)}) -
+                1e-9);
+  }
+  CHECK(found > 20);
+  CHECK(shortened > 0);  // nodes behind the start or beyond the goal were skipped
 }
 
 TEST_CASE("a star: re-plans around blocked edges without rebuilding") {

@@ -132,6 +132,40 @@ TEST_CASE("collisions: circle and rectangle footprints with a height band", "[si
                     "and > 0");
 }
 
+TEST_CASE("footprint clearance: closed form, and zero exactly where contacts begin",
+          "[sim][robot]") {
+  World w;
+  w.add_wall({2, -5}, {2, 5});
+  w.add_box({{-2, 0}, {1.0, 0.6}, 0, 0.40, 0.44});  // a table top
+  w.add_cylinder({{0, 2}, 0.05, 0, 0.1});
+  w.add_hole({{0, -2.5}, {1, 1}, 0, 0.5});
+  w.build_index();
+  const Footprint circle = Footprint::circle(0.3, 0.02, 1.2);
+  CHECK(footprint_clearance(w, circle, {1.2, 0, 0}) == Approx(0.5));         // the wall
+  CHECK(footprint_clearance(w, circle, {0, 1.5, 0}) == Approx(0.5 - 0.35));  // the can
+  CHECK(footprint_clearance(w, circle, {0, -1.6, 0}) == Approx(0.4 - 0.3));  // the stair hole
+  CHECK(footprint_clearance(w, circle, {-2, 0.9, 0}) == Approx(0.6 - 0.3));  // the table top
+  CHECK(footprint_clearance(w, Footprint::circle(0.3, 0.02, 0.35), {-2, 0.9, 0}) == 1.0);  // under
+  CHECK(footprint_clearance(w, circle, {0, 0, 0}, 0.5) == 0.5);  // nothing within 0.5 m
+  CHECK(footprint_clearance(w, circle, {1.8, 0, 0}) == 0.0);     // touching
+  const Footprint rect = Footprint::rectangle(0.6, 0.4);  // front 0.3 ahead, corner at 45 deg
+  CHECK(footprint_clearance(w, rect, {1.2, 0, 0}) == Approx(0.5));
+  CHECK(footprint_clearance(w, rect, {1.2, 0, pi / 4}) == Approx(0.8 - 0.5 / std::sqrt(2.0)));
+  // Against footprint_contacts on random poses in the apartment: zero iff touching, and a
+  // footprint grown by the clearance (minus a hair) touches nothing.
+  const Scene apt = apartment();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> x(0.2, 9.8), a(-pi, pi);
+  for (int i = 0; i < 300; ++i) {
+    const Pose2d p{x(rng), x(rng), a(rng)};
+    const double c = footprint_clearance(apt.world, circle, p);
+    CHECK((c == 0.0) == !footprint_contacts(apt.world, circle, p).empty());
+    if (c > 0.002)
+      CHECK(
+          footprint_contacts(apt.world, Footprint::circle(0.3 + c - 0.001, 0.02, 1.2), p).empty());
+  }
+}
+
 TEST_CASE("the built-in worlds' start poses and tours are collision-free", "[sim][robot]") {
   const Footprint fp = Footprint::circle(0.3, 0.02, 1.5);
   for (const Scene& s : {apartment(), office_corridor(), kitchen()}) {

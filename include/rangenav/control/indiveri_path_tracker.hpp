@@ -10,13 +10,14 @@
 // maintaining the currently tracked path segment". The linear velocity "can be freely chosen and
 // adapted": here it is the set speed, reduced while the robot faces away from the segment.
 //
-// The latest scan, transformed into the segment's frame, tells whether the segment ahead is free;
-// if it is not, the command asks for re-planning and names the graph edge to mark blocked.
+// The latest scan, transformed into the frames of the segments ahead, tells whether the path ahead
+// is free; if it is not, the command asks for re-planning and names the graph edge to mark blocked.
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -47,7 +48,7 @@ struct IndiveriPathTrackerParams {
   double max_angular_speed = 2.0;       ///< |omega| limit (rad/s)
   double min_speed_fraction = 0.2;      ///< v = speed * max(this, cos theta)
   double corridor_half_width = 0.215;   ///< blocked check: half robot width + margin (m)
-  double lookahead = 1.5;               ///< blocked check: how far ahead on the segment (m)
+  double lookahead = 1.5;               ///< blocked check: how far ahead along the path (m)
   std::size_t min_blocking_points = 2;  ///< blocked check: points needed to call it blocked
 
   void validate(std::string_view where) const {
@@ -124,43 +125,61 @@ class IndiveriPathTracker {
     return cmd;
   }
 
-  /// As step(pose), after checking the current segment against `scan` (points in the robot frame,
-  /// e.g. a LaserScan or an obstacle map): if at least min_blocking_points lie on the segment
-  /// ahead of the robot (within corridor_half_width of it and lookahead along it), the command
-  /// stops the robot and asks for re-planning.
+  /// As step(pose), after checking the path ahead against `scan` (points in the robot frame, e.g.
+  /// a LaserScan or an obstacle map): if at least min_blocking_points lie on one segment within
+  /// lookahead of the robot along the path (within corridor_half_width of the segment), the
+  /// command stops the robot and asks for re-planning, naming that segment's graph edge.
   template <PointCloudOf<2> C>
   [[nodiscard]] TrackerCommand step(const Pose2d& pose, const C& scan) {
     TrackerCommand cmd = step(pose);
     if (cmd.finished) return cmd;
-    if (segment_blocked(pose, scan)) {
+    if (const auto blocked = blocked_segment(pose, scan)) {
       cmd.v = 0.0;
       cmd.omega = 0.0;
       cmd.replan = true;
-      cmd.blocked_edge = path_.segment(segment_).edge;
+      cmd.blocked_edge = path_.segment(*blocked).edge;
     }
     return cmd;
   }
 
-  /// Whether the current segment ahead of the robot at `pose` is blocked by points of `scan`
-  /// (robot frame).
+  /// The first segment of the path ahead of the robot at `pose` (from the current one on, up to
+  /// lookahead along the path) on which at least min_blocking_points of `scan` (robot frame) lie
+  /// within corridor_half_width; nothing when the way is free. A path of many short segments
+  /// (a Voronoi graph's chain along a corridor) is checked as far ahead as a single long one.
+  template <PointCloudOf<2> C>
+  [[nodiscard]] std::optional<std::size_t> blocked_segment(const Pose2d& pose,
+                                                           const C& scan) const {
+    check("IndiveriPathTracker::blocked_segment", pose);
+    const std::size_t n = traits::size(scan);
+    double from = path_.segment(segment_).to_local(pose.position()).x();
+    double remaining = params_.lookahead;
+    if (from < 0.0) {  // segment switching moved on before the robot reached the segment's start
+      remaining += from;
+      from = 0.0;
+    }
+    for (std::size_t k = segment_; k < path_.size() && remaining > 0.0; ++k) {
+      const PathSegment& seg = path_.segment(k);
+      const Pose2d robot = seg.to_local(pose);  // the robot in the segment frame
+      const double to = std::min(seg.length, from + remaining);
+      const double c = std::cos(robot.theta), s = std::sin(robot.theta);
+      std::size_t hits = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const Point2d p = traits::point(scan, i).template cast<double>();
+        const double x = robot.x + c * p.x() - s * p.y();
+        const double y = robot.y + s * p.x() + c * p.y();
+        if (x >= from && x <= to && std::abs(y) <= params_.corridor_half_width)
+          if (++hits >= params_.min_blocking_points) return k;
+      }
+      remaining -= std::max(0.0, to - from);
+      from = 0.0;
+    }
+    return std::nullopt;
+  }
+
+  /// Whether the path ahead of the robot at `pose` is blocked by points of `scan` (robot frame).
   template <PointCloudOf<2> C>
   [[nodiscard]] bool segment_blocked(const Pose2d& pose, const C& scan) const {
-    check("IndiveriPathTracker::segment_blocked", pose);
-    const PathSegment& seg = path_.segment(segment_);
-    const Pose2d robot = seg.to_local(pose);  // the robot in the segment frame
-    const double from = std::max(0.0, robot.x);
-    const double to = std::min(seg.length, robot.x + params_.lookahead);
-    const double c = std::cos(robot.theta), s = std::sin(robot.theta);
-    std::size_t hits = 0;
-    const std::size_t n = traits::size(scan);
-    for (std::size_t i = 0; i < n; ++i) {
-      const Point2d p = traits::point(scan, i).template cast<double>();
-      const double x = robot.x + c * p.x() - s * p.y();
-      const double y = robot.y + s * p.x() + c * p.y();
-      if (x >= from && x <= to && std::abs(y) <= params_.corridor_half_width)
-        if (++hits >= params_.min_blocking_points) return true;
-    }
-    return false;
+    return blocked_segment(pose, scan).has_value();
   }
 
   /// Eq. (7) of paper 000, with sin(theta)/theta -> 1 at theta = 0.

@@ -5,11 +5,21 @@
 // PI term corrects the remaining small disturbances (battery state, load); no D term. The motors
 // receive band-limited signals: the output is clamped to the PWM band and its change per cycle is
 // limited.
+//
+// "A given speed and steering angle are scaled by two feed forward terms F_v and F_omega and
+// mapped to a PWM value according to T. F_v is set to 1 [...]. An additional feed forward term is
+// needed for the angular velocity (F_omega = pi^-1 cm) according to the significant friction
+// during turning." Read here as: the wheel's set speed v enters as F_v v, and the robot's turn
+// rate omega adds side F_omega omega, with F_omega a length (m per rad/s, so F_omega omega is a
+// speed) and side = +1 for the right wheel, -1 for the left one (omega > 0 turns left, so the
+// right wheel has to drive forward harder and the left one backward harder against the skid
+// friction).
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <numbers>
 #include <string>
 #include <utility>
 #include <vector>
@@ -82,6 +92,10 @@ class SpeedPwmTable {
 struct MotorControllerParams {
   double dt = 0.01;           ///< control period (s); Kurt3D's loop runs at 100 Hz
   double feed_forward = 1.0;  ///< F_v, 1 "according to the design of the lookup table"
+  /// F_omega (m per rad/s): extra wheel speed per unit turn rate against the turning friction;
+  /// paper 003's pi^-1 cm.
+  double feed_forward_omega = 0.01 / std::numbers::pi;
+  double side = 1.0;          ///< +1: right wheel, -1: left wheel (sign of the F_omega term)
   double load_offset = 0.0;   ///< speed lost to the load, e.g. carpet vs no-load (m/s)
   double kp = 100.0;          ///< proportional gain (PWM per m/s)
   double ki = 200.0;          ///< integral gain (PWM per m)
@@ -91,6 +105,9 @@ struct MotorControllerParams {
   void validate(std::string_view where) const {
     detail::require_positive(where, "params.dt", dt);
     detail::require_positive(where, "params.feed_forward", feed_forward);
+    detail::require_non_negative(where, "params.feed_forward_omega", feed_forward_omega);
+    if (side != 1.0 && side != -1.0)
+      detail::throw_invalid_argument(where, "params.side", side, "must be +1 or -1");
     detail::require_non_negative(where, "params.load_offset", load_offset);
     detail::require_non_negative(where, "params.kp", kp);
     detail::require_non_negative(where, "params.ki", ki);
@@ -111,19 +128,23 @@ class MotorController {
   [[nodiscard]] const MotorControllerParams& params() const { return params_; }
   [[nodiscard]] const SpeedPwmTable& table() const { return table_; }
 
-  /// The open-loop part: T^-1(F_v v + offset), signed; 0 for v = 0.
-  [[nodiscard]] double feed_forward(double v_set) const {
-    if (v_set == 0.0) return 0.0;
-    return table_.pwm(
-        std::copysign(params_.feed_forward * std::abs(v_set) + params_.load_offset, v_set));
+  /// The open-loop part: with s = F_v v + side F_omega omega, T^-1(s + offset) signed like s;
+  /// 0 for s = 0.
+  [[nodiscard]] double feed_forward(double v_set, double omega_set = 0.0) const {
+    const double s =
+        params_.feed_forward * v_set + params_.side * params_.feed_forward_omega * omega_set;
+    if (s == 0.0) return 0.0;
+    return table_.pwm(std::copysign(std::abs(s) + params_.load_offset, s));
   }
 
-  /// One control cycle: the PWM for set speed `v_set` given the measured speed `v_measured`.
-  /// Non-finite input yields the previous output (never throws: it runs in the control loop).
-  [[nodiscard]] double step(double v_set, double v_measured) {
-    if (!std::isfinite(v_set) || !std::isfinite(v_measured)) return output_;
+  /// One control cycle: the PWM for the wheel's set speed `v_set` given its measured speed
+  /// `v_measured`, while the robot turns at `omega_set` (rad/s; feeds the F_omega term). Non-finite
+  /// input yields the previous output (never throws: it runs in the control loop).
+  [[nodiscard]] double step(double v_set, double v_measured, double omega_set = 0.0) {
+    if (!std::isfinite(v_set) || !std::isfinite(v_measured) || !std::isfinite(omega_set))
+      return output_;
     const double error = v_set - v_measured;
-    const double ff = feed_forward(v_set);
+    const double ff = feed_forward(v_set, omega_set);
     const double integral = integral_ + error * params_.dt;
     double u = ff + params_.kp * error + params_.ki * integral;
     const double band = std::clamp(u, -params_.pwm_limit, params_.pwm_limit);

@@ -159,10 +159,19 @@ template <PointCloudOf<2> C>
   return dto / params.dto_max * params.v_max;
 }
 
+/// Which way a robot stopped by the roadway turns on the spot.
+enum class StopTurn {
+  toward_free_space,  ///< toward alpha_free (paper 002 §5), else in the commanded sense
+  commanded,          ///< in the sense of the commanded omega, else toward alpha_free: for a
+                      ///< goal-directed controller (path tracker, pose controller) that knows
+                      ///< where it wants to turn; turning away and back would livelock with it
+};
+
 struct ReactiveParams {
   VirtualRoadwayParams roadway{};
   FreeSpaceParams free_space{};
   bool use_free_space = true;  ///< apply the third behaviour
+  StopTurn stop_turn = StopTurn::toward_free_space;
 };
 
 struct ReactiveCommand {
@@ -174,7 +183,10 @@ struct ReactiveCommand {
 };
 
 /// The three reactive behaviours of paper 002 §5 applied to a desired (v, omega), e.g. from a
-/// path tracker or a constant "drive forward".
+/// path tracker or a constant "drive forward". A stopped robot keeps the sense of turn it chose
+/// until the roadway is free again ("turns on the spot until ..."): re-deciding every cycle from a
+/// free-space vote or a commanded omega near zero makes it twitch left and right on the spot. So
+/// apply() updates that one bit of state; reset() forgets it.
 class ReactiveBehaviours {
  public:
   explicit ReactiveBehaviours(const ReactiveParams& params = {}) : params_(params) {
@@ -182,12 +194,14 @@ class ReactiveBehaviours {
     params_.free_space.validate("ReactiveBehaviours");
   }
   [[nodiscard]] const ReactiveParams& params() const { return params_; }
+  /// Forgets the sense of turn of a stop (e.g. after a new goal).
+  void reset() { turn_sense_ = 0; }
 
   /// Adapts (v, omega) to `obstacles` (robot frame). The speed is scaled like v_set:
   /// v * min(1, dto / dto_max), and 0 below dto_min; a stopped robot turns on the spot toward
   /// free space (or backs off when backoff_speed > 0).
   template <PointCloudOf<2> C>
-  [[nodiscard]] ReactiveCommand apply(double v, double omega, const C& obstacles) const {
+  [[nodiscard]] ReactiveCommand apply(double v, double omega, const C& obstacles) {
     ReactiveCommand cmd;
     cmd.dto = roadway_distance(obstacles, params_.roadway);
     if (params_.use_free_space)
@@ -198,7 +212,7 @@ class ReactiveBehaviours {
   /// As apply() for a laser scan (free-space votes of empty beams included, see
   /// free_space_orientation(LaserScan)).
   template <class Scalar>
-  [[nodiscard]] ReactiveCommand apply(double v, double omega, const LaserScan<Scalar>& scan) const {
+  [[nodiscard]] ReactiveCommand apply(double v, double omega, const LaserScan<Scalar>& scan) {
     ReactiveCommand cmd;
     cmd.dto = roadway_distance(scan, params_.roadway);
     if (params_.use_free_space) cmd.alpha_free = free_space_orientation(scan, params_.free_space);
@@ -206,7 +220,7 @@ class ReactiveBehaviours {
   }
 
  private:
-  ReactiveCommand finish(double v, double omega, ReactiveCommand cmd) const {
+  ReactiveCommand finish(double v, double omega, ReactiveCommand cmd) {
     const VirtualRoadwayParams& r = params_.roadway;
     if (v > 0.0 && cmd.dto < r.dto_min) {
       cmd.stopped = true;
@@ -214,13 +228,20 @@ class ReactiveBehaviours {
         cmd.v = -r.backoff_speed;
         cmd.omega = 0.0;
       } else {
-        // Turn toward free space; without a free-space vote keep the commanded sense of turn.
-        const double side = cmd.alpha_free ? *cmd.alpha_free : omega;
+        if (turn_sense_ == 0) {
+          // Turn toward free space; without a free-space vote keep the commanded sense of turn
+          // (or the other way round with StopTurn::commanded).
+          const bool commanded =
+              !cmd.alpha_free || (params_.stop_turn == StopTurn::commanded && omega != 0.0);
+          const double side = commanded ? omega : *cmd.alpha_free;
+          turn_sense_ = side < 0.0 ? -1 : 1;
+        }
         cmd.v = 0.0;
-        cmd.omega = side < 0.0 ? -r.turn_rate : r.turn_rate;
+        cmd.omega = turn_sense_ * r.turn_rate;
       }
       return cmd;
     }
+    turn_sense_ = 0;
     cmd.v = v > 0.0 ? v * std::min(1.0, roadway_speed(cmd.dto, r) / r.v_max) : v;
     cmd.omega = omega;
     if (cmd.alpha_free) cmd.omega += params_.free_space.influence * *cmd.alpha_free;
@@ -228,6 +249,7 @@ class ReactiveBehaviours {
   }
 
   ReactiveParams params_;
+  int turn_sense_{0};  ///< +1 / -1 while stopped and turning, 0 otherwise
 };
 
 }  // namespace rangenav

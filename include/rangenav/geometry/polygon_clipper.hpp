@@ -118,11 +118,14 @@ template <class Scalar>
 namespace detail {
 
 // Out of line so that the warning above is attributed to these bodies, inside the pragma.
-// As the paper does with Vatti's algorithm: the intersection, tested for a positive area. (A DE-9IM
-// relate would be the direct test, but its out-of-line body in Boost trips the same warning.)
+// As the paper does with Vatti's algorithm: the intersection, tested for a positive area, after
+// the cheap boost::geometry::intersects (no overlay) has found a common point at all. (A DE-9IM
+// relate, or intersects and not touches, would avoid the overlay, but their out-of-line bodies in
+// Boost trip the warning above.)
 template <class Scalar>
 [[gnu::noinline]] bool boost_interiors_intersect(const BoostPolygon2<Scalar>& a,
                                                  const BoostPolygon2<Scalar>& b) {
+  if (!boost::geometry::intersects(a, b)) return false;
   boost::geometry::model::multi_polygon<BoostPolygon2<Scalar>> common;
   boost::geometry::intersection(a, b, common);
   return boost::geometry::area(common) > Scalar(0);
@@ -137,9 +140,9 @@ template <class Scalar>
 
 }  // namespace detail
 
-/// The default PolygonClipper on Boost.Geometry (header-only): the intersection test computes
-/// boost::geometry::intersection and checks for a positive area, the union is
-/// boost::geometry::union_. Boost 1.74
+/// The default PolygonClipper on Boost.Geometry (header-only): the intersection test is
+/// boost::geometry::intersects followed by boost::geometry::intersection (positive area?), the
+/// union is boost::geometry::union_. Boost 1.74
 /// rescales the coordinates to an integer grid internally for robust overlays.
 /// Stateless and thread-safe.
 struct BoostGeometryClipper {

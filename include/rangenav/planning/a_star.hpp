@@ -49,6 +49,13 @@ struct AStarParams {
   /// Clearance the straight connecting segments must keep (m); negative: the graph's
   /// required_clearance().
   double connection_clearance = -1.0;
+  /// Drop the first (last) graph nodes of a path while the start (goal) reaches the next
+  /// (previous) node by a straight segment that keeps the connection clearance and is at most
+  /// shortcut_length long: the attachment rule may pick a node behind the start or beyond the
+  /// goal, and the path would double back. The limit keeps graph edges (which can be marked
+  /// blocked) from being replaced by long connections (which cannot).
+  bool shortcut_ends = true;
+  double shortcut_length = 1.0;  ///< m
 };
 
 /// Why plan() did or did not find a path.
@@ -140,6 +147,7 @@ class AStar {
         std::vector<index_type> edges;
         const auto cost = shortest_path(s, g, &result.path.nodes, &edges, &result.expanded);
         if (!cost) continue;  // cannot happen within one component; kept for safety
+        if (params_.shortcut_ends) shortcut(start, goal, result.path.nodes, edges);
         PlannedPath& path = result.path;
         path.waypoints.clear();
         path.edges.clear();
@@ -266,13 +274,9 @@ class AStar {
     nodes_.query(boost::geometry::index::nearest(bg_point(pose.x(), pose.y()),
                                                  static_cast<unsigned>(params_.attach_candidates)),
                  std::back_inserter(near));
-    const double wanted = params_.connection_clearance >= 0.0
-                              ? params_.connection_clearance
-                              : graph_->params().required_clearance();
     // An endpoint already closer to an obstacle than wanted may still leave along a segment that
     // comes no closer than it already is.
-    const double here = segment_clearance(pose, pose);
-    const double required = std::min(wanted, here) - 1e-9;
+    const double required = connection_required(pose);
     struct Candidate {
       index_type node;
       double distance;
@@ -303,6 +307,37 @@ class AStar {
     for (const Candidate& c : ok)
       out.push_back(c.node);
     return out;
+  }
+
+  /// The clearance a straight connection from `p` must keep: connection_clearance, or less when
+  /// p itself is closer to an obstacle.
+  double connection_required(const Point2d& p) const {
+    const double wanted = params_.connection_clearance >= 0.0
+                              ? params_.connection_clearance
+                              : graph_->params().required_clearance();
+    return std::min(wanted, segment_clearance(p, p)) - 1e-9;
+  }
+
+  /// shortcut_ends: drops the end nodes the start / goal can skip with a clear straight segment.
+  void shortcut(const Point2d& start, const Point2d& goal, std::vector<index_type>& nodes,
+                std::vector<index_type>& edges) const {
+    const auto& nd = graph_->nodes();
+    const double at_start = connection_required(start), at_goal = connection_required(goal);
+    std::size_t first = 0, last = nodes.size() - 1;
+    const double reach = params_.shortcut_length;
+    const auto skips = [&](const Point2d& end, index_type node, double required) {
+      const Point2d& p = nd[node].position;
+      return (p - end).norm() <= reach && segment_clearance(end, p) >= required;
+    };
+    while (first < last && skips(start, nodes[first + 1], at_start))
+      ++first;
+    while (last > first && skips(goal, nodes[last - 1], at_goal))
+      --last;
+    if (first == 0 && last + 1 == nodes.size()) return;
+    nodes = std::vector<index_type>(nodes.begin() + static_cast<std::ptrdiff_t>(first),
+                                    nodes.begin() + static_cast<std::ptrdiff_t>(last) + 1);
+    edges = std::vector<index_type>(edges.begin() + static_cast<std::ptrdiff_t>(first),
+                                    edges.begin() + static_cast<std::ptrdiff_t>(last));
   }
 
   /// Connected components of the traversable graph, recomputed when the blocked set changed.

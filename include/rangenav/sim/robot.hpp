@@ -148,6 +148,76 @@ struct Footprint {
   return contacts;
 }
 
+/// The true clearance of a footprint at a pose: the smallest distance (m) from the footprint to any
+/// primitive in its height band (walls, boxes, cylinders, door leaves, and floor holes at any
+/// height), 0 when it touches one, `max_distance` when nothing is nearer than that. The
+/// ground truth for "how close did the robot come" (footprint_contacts says only whether).
+[[nodiscard]] inline double footprint_clearance(const World& world, const Footprint& fp,
+                                                const Pose2d& pose, double max_distance = 1.0) {
+  namespace bg = boost::geometry;
+  using P = bg::model::d2::point_xy<double>;
+  using Polygon = bg::model::polygon<P, false, true>;  // counter-clockwise, closed
+  using Segment = bg::model::segment<P>;
+  const auto to_p = [](const Point2d& v) { return P(v.x(), v.y()); };
+  const auto rect = [&](const Point2d& c, const Point2d& half, double yaw) {
+    const Eigen::Rotation2Dd r(yaw);
+    Polygon poly;
+    for (const auto& [sx, sy] :
+         {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}, {-1.0, -1.0}})
+      poly.outer().push_back(to_p(c + r * Point2d(sx * half.x(), sy * half.y())));
+    return poly;
+  };
+  const bool circle = fp.shape == Footprint::Shape::circle;
+  const P centre(pose.x, pose.y);
+  Polygon body;
+  if (!circle)
+    body = rect(pose.transform_point({fp.x_offset, 0}), {fp.length / 2, fp.width / 2}, pose.theta);
+  // Distance from the footprint to a geometry: a disc's is the centre's minus the radius.
+  const auto distance = [&](const auto& geometry) {
+    return circle ? bg::distance(centre, geometry) - fp.radius : bg::distance(body, geometry);
+  };
+  const auto band = [&](double z0, double z1) { return z0 <= fp.z_max && z1 >= fp.z_min; };
+  const double reach = fp.bounding_radius() + max_distance;
+  std::vector<PrimitiveRef> candidates;
+  world.primitives_near(pose.position() - Point2d::Constant(reach),
+                        pose.position() + Point2d::Constant(reach), candidates);
+  double best = max_distance;
+  for (const PrimitiveRef& ref : candidates) {
+    double d = max_distance;
+    switch (ref.kind) {
+      case SurfaceKind::wall: {
+        const Wall& w = world.walls()[ref.index];
+        if (band(0, w.height)) d = distance(Segment(to_p(w.a), to_p(w.b)));
+        break;
+      }
+      case SurfaceKind::box: {
+        const Box& b = world.boxes()[ref.index];
+        if (band(b.z_min, b.z_max)) d = distance(rect(b.center, b.size / 2, b.yaw));
+        break;
+      }
+      case SurfaceKind::cylinder: {
+        const Cylinder& c = world.cylinders()[ref.index];
+        if (band(c.z_min, c.z_max)) d = distance(to_p(c.center)) - c.radius;
+        break;
+      }
+      case SurfaceKind::door: {
+        const Box b = world.doors()[ref.index].leaf();
+        if (band(b.z_min, b.z_max)) d = distance(rect(b.center, b.size / 2, b.yaw));
+        break;
+      }
+      case SurfaceKind::hole: {
+        const FloorHole& h = world.holes()[ref.index];
+        d = distance(rect(h.center, h.size / 2, h.yaw));
+        break;
+      }
+      default:
+        break;
+    }
+    best = std::min(best, std::max(0.0, d));
+  }
+  return best;
+}
+
 /// Systematic and random odometry errors. The wheel odometry measures
 ///   v_m = (1 + v_scale) v + N(0, v_sigma^2),  omega_m = (1 + omega_scale) omega + omega_bias +
 ///   N(0, omega_sigma^2)
