@@ -64,6 +64,24 @@ void BM_PathTrackerStepWithScanCheck(benchmark::State& state) {
 }
 BENCHMARK(BM_PathTrackerStepWithScanCheck);
 
+// The same check on a Voronoi chain: 2 cm segments, so the 1.5 m lookahead spans 75 of them.
+void BM_PathTrackerStepDenseChainScanCheck(benchmark::State& state) {
+  std::vector<Point2d> wp;
+  for (int i = 0; i <= 500; ++i)
+    wp.emplace_back(0.02 * i, 0.0);
+  rangenav::IndiveriPathTracker tracker;
+  tracker.set_path(rangenav::LocalFramePath(wp));
+  const auto scan = corridor_scan();
+  Pose2d pose{0.5, 0.1, 0.2};
+  for (auto _ : state) {
+    const auto cmd = tracker.step(pose, scan);
+    benchmark::DoNotOptimize(cmd.replan);
+    pose.y = -pose.y;
+  }
+  state.counters["beams"] = static_cast<double>(scan.size());
+}
+BENCHMARK(BM_PathTrackerStepDenseChainScanCheck);
+
 void BM_PoseControllerStep(benchmark::State& state) {
   const rangenav::IndiveriPoseController controller;
   Pose2d pose{1.0, 0.5, 2.0};

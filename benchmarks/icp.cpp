@@ -223,8 +223,29 @@ void BM_pcl_3d_kitti(benchmark::State& state) {
   report_3d(state, pair, result, 0);
 }
 
+void BM_pcl_3d_bunny(benchmark::State& state) {
+  if (!have_data(state, "pcl_test/bun0.pcd")) return;
+  const auto& pair = bunny();
+  const auto source = to_pcl(pair.source), target = to_pcl(pair.target);
+  pcl::PointCloud<pcl::PointXYZ> aligned;
+  Eigen::Matrix4d result = Eigen::Matrix4d::Identity();
+  for (auto _ : state) {
+    pcl::IterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ> icp;
+    icp.setInputTarget(target);
+    icp.setInputSource(source);
+    icp.setMaxCorrespondenceDistance(0.05);
+    icp.setMaximumIterations(50);
+    icp.setTransformationEpsilon(1e-6);
+    icp.align(aligned);
+    result = icp.getFinalTransformation().cast<double>();
+  }
+  state.counters["angle_deg"] =
+      Eigen::AngleAxisd(result.block<3, 3>(0, 0)).angle() * 180 / std::numbers::pi;
+}
+
 BENCHMARK(BM_pcl_2d_scan_to_scan)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_pcl_3d_kitti)->Unit(benchmark::kMillisecond)->MinTime(1.0);
+BENCHMARK(BM_pcl_3d_bunny)->Unit(benchmark::kMillisecond);
 #endif
 
 // ---- Open3D
@@ -274,8 +295,25 @@ void BM_open3d_3d_kitti(benchmark::State& state) {
   report_3d(state, pair, r.transformation_, 0);
 }
 
+void BM_open3d_3d_bunny(benchmark::State& state) {
+  if (!have_data(state, "pcl_test/bun0.pcd")) return;
+  const auto& pair = bunny();
+  const auto source = to_open3d(pair.source), target = to_open3d(pair.target);
+  namespace reg = open3d::pipelines::registration;
+  reg::RegistrationResult r;
+  for (auto _ : state) {
+    r = reg::RegistrationICP(source, target, 0.05, Eigen::Matrix4d::Identity(),
+                             reg::TransformationEstimationPointToPoint(),
+                             reg::ICPConvergenceCriteria(1e-6, 1e-6, 50));
+  }
+  state.counters["rmse_mm"] = r.inlier_rmse_ * 1000;
+  state.counters["angle_deg"] =
+      Eigen::AngleAxisd(r.transformation_.block<3, 3>(0, 0)).angle() * 180 / std::numbers::pi;
+}
+
 BENCHMARK(BM_open3d_2d_scan_to_scan)->Unit(benchmark::kMillisecond)->Iterations(2);
 BENCHMARK(BM_open3d_3d_kitti)->Unit(benchmark::kMillisecond)->MinTime(1.0);
+BENCHMARK(BM_open3d_3d_bunny)->Unit(benchmark::kMillisecond);
 #endif
 
 }  // namespace

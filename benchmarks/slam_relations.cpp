@@ -10,7 +10,8 @@
 //                                               against slam-benchmark/mit-csail.relations (all,
 //                                               short < 2 s, long), the sparse-map sizes, then
 //                                               times the whole log per iteration (scans per
-//                                               second) for both.
+//                                               second) for both, and for the papers' setup
+//                                               with a GrowingKdTree map index.
 
 #include <benchmark/benchmark.h>
 
@@ -72,6 +73,12 @@ const std::vector<rangenav::io::CarmenLaser>& csail() {
 rangenav::IncrementalMapper<2> paper_mapper() {
   return rangenav::IncrementalMapper<2>();
 }
+// The papers' setup with the map indexed by the growing kd-tree instead of the 2D grid.
+using KdTreeMapper = rangenav::IncrementalMapper<2, double, rangenav::PaperIcp<2>,
+                                                 rangenav::GrowingKdTree<2, double>>;
+KdTreeMapper kd_tree_mapper() {
+  return KdTreeMapper();
+}
 rangenav::LaserSlamMapper<double> laser_mapper() {
   return rangenav::LaserSlamMapper<double>(rangenav::laser_slam_params<double>());
 }
@@ -92,10 +99,14 @@ void time_mapper(benchmark::State& state, Make make) {
 void BM_rangenav_mapper_csail(benchmark::State& state) {
   time_mapper(state, paper_mapper);
 }
+void BM_rangenav_mapper_kd_tree_csail(benchmark::State& state) {
+  time_mapper(state, kd_tree_mapper);
+}
 void BM_rangenav_laser_mapper_csail(benchmark::State& state) {
   time_mapper(state, laser_mapper);
 }
 BENCHMARK(BM_rangenav_mapper_csail)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_rangenav_mapper_kd_tree_csail)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_rangenav_laser_mapper_csail)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace

@@ -261,7 +261,8 @@ NavigationResult run_navigation(const Scene& scene, unsigned seed) {
       obstacles.update(relative(previous, pose), extractor.push(ps, pose));
       previous = pose;
     }
-    if (step++ % 5 == 0) {
+    const bool fresh_scan = step++ % 5 == 0;
+    if (fresh_scan) {
       const LaserScan<double> scan = laser.scan(world, pose, rng, robot.time());
       scan_points.clear();
       for (const Point2d& p : scan.valid_points())
@@ -269,8 +270,9 @@ NavigationResult run_navigation(const Scene& scene, unsigned seed) {
     }
     double v = 0, omega = 0;
     if (!approaching) {
-      TrackerCommand cmd = tracker.step(pose, scan_points);
-      if (!cmd.replan) cmd = tracker.step(pose, obstacles);
+      // The path ahead is checked against each new 2D scan and the obstacle map (10 Hz).
+      TrackerCommand cmd = fresh_scan ? tracker.step(pose, scan_points) : tracker.step(pose);
+      if (fresh_scan && !cmd.replan) cmd = tracker.step(pose, obstacles);
       if (cmd.replan && cmd.blocked_edge != LocalFramePath::no_edge) {
         // Paper 000 §4: mark the edge not traversable and re-plan on the same diagram.
         graph.set_blocked(cmd.blocked_edge);

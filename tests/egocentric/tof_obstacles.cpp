@@ -149,3 +149,57 @@ TEST_CASE("organised clouds (RGB-D frames) go through the same detection", "[ego
   CHECK_THROWS_WITH(from_cloud.detect(Cloud3d{}, camera_extrinsics()),
                     "rangenav: HeightImageObstacleDetector::detect: the cloud is empty");
 }
+
+TEST_CASE("the height-image test equals a brute-force Eq. (15) over W, pixel by pixel",
+          "[egocentric][tof]") {
+  // The detector skips the column walk where a block-wise column minimum proves the point flat;
+  // the mask must still be exactly the definition: z in the corridor and z - min(W) > ε_H, W the
+  // Moore neighbourhood plus the column while within window_radius (up to window_steps rows).
+  Scene scene;
+  scene.stair_x = 2.2;  // a stair edge, a box, a noisy floor: every case of the window
+  const DepthImage<double> img = render(scene, 0.01, 17);
+  for (const std::size_t steps : {std::size_t(8), std::size_t(3), std::size_t(200)}) {
+    HeightImageParams<double> params;
+    params.window_steps = steps;
+    HeightImageObstacleDetector<double> detector(params);
+    detector.detect(img, camera_extrinsics());
+    const auto& pts = detector.points();
+    const std::size_t w = 176, h = 144;
+    const auto height = [&](std::size_t i) {  // heights that count in W
+      const Point3d& q = pts[i];
+      return q.allFinite() && q.z() >= -params.below_floor
+                 ? q.z()
+                 : std::numeric_limits<double>::infinity();
+    };
+    std::size_t mismatches = 0, obstacles = 0;
+    for (std::size_t r = 0; r < h; ++r)
+      for (std::size_t c = 0; c < w; ++c) {
+        const std::size_t i = r * w + c;
+        const Point3d& p = pts[i];
+        bool expected = false;
+        if (p.allFinite() && p.z() < -params.below_floor) {
+          expected = true;  // an artificial obstacle (the ray meets the floor)
+        } else if (p.allFinite() && p.z() >= params.z_min && p.z() <= params.z_max) {
+          double lo = p.z();
+          for (std::size_t rr = r == 0 ? 0 : r - 1; rr <= std::min(r + 1, h - 1); ++rr)
+            for (std::size_t cc = c == 0 ? 0 : c - 1; cc <= std::min(c + 1, w - 1); ++cc)
+              lo = std::min(lo, height(rr * w + cc));
+          for (const int dir : {-1, 1})
+            for (std::size_t k = 2; k <= steps; ++k) {
+              const auto rr = static_cast<std::ptrdiff_t>(r) + dir * static_cast<std::ptrdiff_t>(k);
+              if (rr < 0 || rr >= static_cast<std::ptrdiff_t>(h)) break;
+              const std::size_t j = static_cast<std::size_t>(rr) * w + c;
+              const double dx = pts[j].x() - p.x(), dy = pts[j].y() - p.y();
+              if (dx * dx + dy * dy > params.window_radius * params.window_radius) break;
+              lo = std::min(lo, height(j));
+            }
+          expected = p.z() - lo > params.epsilon_h;
+        }
+        obstacles += expected ? 1 : 0;
+        mismatches += (detector.obstacle_mask()[i] != 0) != expected ? 1 : 0;
+      }
+    INFO("window_steps " << steps);
+    CHECK(obstacles > 500);
+    CHECK(mismatches == 0);
+  }
+}

@@ -268,4 +268,23 @@ TEST_CASE("LaserSlamMapper tracks through odometry that freezes and then jumps",
   CHECK(run(odometry_only) > 0.3);  // the odometry guess alone is off by the frozen motion
   CHECK(LaserSlamMapper<double>::uses_normals);
   CHECK_FALSE(IncrementalMapper<2>::uses_normals);
+
+  // Bad input: all-NaN and identical-point scans keep the guess, never a NaN pose; bad
+  // parameters throw with their value.
+  LaserSlamMapper<double> mapper(params);
+  mapper.process(view_2d(world, {0, 0, 0}), Transform2d::Identity());
+  mapper.process(view_2d(world, {0.05, 0, 0}), make_transform2(0.05, 0.0, 0.0));
+  const std::vector<Eigen::Vector2d> nan_scan(50, Eigen::Vector2d::Constant(std::nan("")));
+  const auto u1 = mapper.process(nan_scan, make_transform2(0.1, 0.0, 0.0));
+  CHECK_FALSE(u1.registration_accepted);
+  CHECK(u1.pose.matrix().allFinite());
+  const std::vector<Eigen::Vector2d> same(50, Eigen::Vector2d(1.0, 0.5));
+  const auto u2 = mapper.process(same, make_transform2(0.15, 0.0, 0.0));
+  CHECK(u2.pose.matrix().allFinite());
+  CHECK((u2.pose.translation() - Eigen::Vector2d(0.15, 0.0)).norm() < 0.6);
+  auto bad = params;
+  bad.initial_match_distance = -1.0;
+  CHECK_THROWS_WITH(LaserSlamMapper<double>(bad),
+                    "rangenav: IncrementalMapperParams: argument 'initial_match_distance' = -1 "
+                    "must be finite and > 0");
 }

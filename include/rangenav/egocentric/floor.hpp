@@ -56,22 +56,22 @@ template <std::floating_point Scalar>
 template <std::floating_point Scalar = double>
 struct FloorClassifierParams {
   /// |z| <= floor_band may be floor; whether it is, the neighbourhood decides.
-  Scalar floor_band{0.05};
+  Scalar floor_band{Scalar(0.05)};
   /// ε_H: a point more than this above the lowest point of its neighbourhood is not floor
   /// (at least the sensor's height noise, as for Eq. (15)).
-  Scalar step_height{0.015};
+  Scalar step_height{Scalar(0.015)};
   /// ... and it must lie this much above the floor plane z = 0 (against isolated noise).
-  Scalar min_height{0.015};
+  Scalar min_height{Scalar(0.015)};
   /// m: the neighbourhood extends along the column while points stay this close horizontally.
-  Scalar window_radius{0.1};
+  Scalar window_radius{Scalar(0.1)};
   /// The most points visited in each direction of the column.
   std::size_t window_steps{16};
   /// z < -below_floor is below floor level (§4.2: holes, descending stairs).
-  Scalar below_floor{0.05};
+  Scalar below_floor{Scalar(0.05)};
   /// Non-floor points at or above this height are walls (if not ceiling).
-  Scalar wall_height{1.0};
+  Scalar wall_height{Scalar(1.0)};
   /// Horizontal points (neighbourhood height range <= step_height) at or above this height.
-  Scalar ceiling_height{1.9};
+  Scalar ceiling_height{Scalar(1.9)};
 
   void validate(std::string_view where = "FloorClassifierParams") const {
     detail::require_non_negative(where, "floor_band", floor_band);

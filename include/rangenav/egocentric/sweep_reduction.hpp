@@ -20,6 +20,11 @@
 //      is floor when most of its cluster is.
 // SweepReducer runs all four on a Sweep (egocentric/pitching_stream.hpp) and keeps its buffers,
 // so reducing one sweep after the other allocates nothing once the buffers have grown.
+// Paper 002 only names the four steps and refers to Surmann et al. for the details; choices of
+// ours: exact pairwise cluster distances, the split-and-merge refinement after the ratio growth,
+// the region-growing criteria of step 3 (endpoint distance to the fitted plane, proximity to and
+// direction of the plane's last line, planes reported from min_scans scans on), centroids and
+// lines labelled floor by majority, and every default value.
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -109,15 +114,15 @@ struct LineSegment {
 template <std::floating_point Scalar = double>
 struct LineDetectionParams {
   /// m; consecutive points farther apart end a line.
-  Scalar max_gap{0.2};
+  Scalar max_gap{Scalar(0.2)};
   /// The ratio of the direct distance from a line's first point to the length of the polyline
   /// through its points must stay at or above this (Surmann et al.: close to 1).
-  Scalar min_ratio{0.9};
+  Scalar min_ratio{Scalar(0.9)};
   /// m; a run is split at its farthest point from the chord while that is farther than this.
-  Scalar max_distance{0.015};
+  Scalar max_distance{Scalar(0.015)};
   /// Shorter pieces are no lines.
   std::size_t min_points{5};
-  Scalar min_length{0.1};
+  Scalar min_length{Scalar(0.1)};
 
   void validate(std::string_view where = "LineDetectionParams") const {
     detail::require_positive(where, "max_gap", max_gap);
@@ -321,9 +326,9 @@ template <std::floating_point Scalar = double>
 struct PlaneMergeParams {
   /// m; a line joins a plane only if both its endpoints lie this close to the fitted plane (or,
   /// while the plane has one line, to the plane through that line and this one).
-  Scalar max_distance{0.04};
+  Scalar max_distance{Scalar(0.04)};
   /// m; ... and if it passes this close to the plane's most recent line (region growing) ...
-  Scalar max_line_distance{0.3};
+  Scalar max_line_distance{Scalar(0.3)};
   /// rad; ... and runs within this angle of it (lines of one plane turn slowly from scan to scan;
   /// this also keeps two walls meeting in a corner apart while a plane has a single line).
   Scalar max_angle{deg_to_rad(Scalar(15))};
@@ -349,7 +354,7 @@ struct PlaneMergeParams {
 template <std::floating_point Scalar = double>
 struct SweepReductionParams {
   /// Step 1: m, the largest distance between two points of one cluster.
-  Scalar cluster_distance{0.05};
+  Scalar cluster_distance{Scalar(0.05)};
   LineDetectionParams<Scalar> lines{};
   PlaneMergeParams<Scalar> planes{};
   FloorClassifierParams<Scalar> floor{};
@@ -501,7 +506,7 @@ class SweepReducer {
     PlaneSegment<Scalar> plane{};
 
     void add(const LineSegment<3, Scalar>& line) {
-      const Scalar w = static_cast<Scalar>(line.count) / 2;
+      const Scalar w = static_cast<Scalar>(line.count) / Scalar(2);
       for (const Vec3* p : {&line.a, &line.b}) {
         weight += w;
         sum += w * *p;
@@ -540,9 +545,9 @@ class SweepReducer {
       return (s.a + t * ab - p).squaredNorm();
     };
     Scalar best = std::numeric_limits<Scalar>::infinity();
-    for (const Vec3& p : {u.a, u.b, Vec3((u.a + u.b) / 2)})
+    for (const Vec3& p : {u.a, u.b, Vec3((u.a + u.b) / Scalar(2))})
       best = std::min(best, to_segment(p, v));
-    for (const Vec3& p : {v.a, v.b, Vec3((v.a + v.b) / 2)})
+    for (const Vec3& p : {v.a, v.b, Vec3((v.a + v.b) / Scalar(2))})
       best = std::min(best, to_segment(p, u));
     return best;
   }

@@ -100,7 +100,9 @@ struct MapperUpdate {
   SparseInsertStats inserted{};
 };
 
-template <int D, std::floating_point Scalar = double, class IcpType = PaperIcp<D, Scalar>>
+/// `Index` is the map's search structure (SparsePointMap's third parameter).
+template <int D, std::floating_point Scalar = double, class IcpType = PaperIcp<D, Scalar>,
+          class Index = DefaultMapIndex<D, Scalar>>
 class IncrementalMapper {
  public:
   using transform_type = Transform<D, Scalar>;
@@ -231,7 +233,7 @@ class IncrementalMapper {
     return update;
   }
 
-  [[nodiscard]] const SparsePointMap<D, Scalar>& map() const { return map_; }
+  [[nodiscard]] const SparsePointMap<D, Scalar, Index>& map() const { return map_; }
   [[nodiscard]] const transform_type& pose() const { return pose_; }
   [[nodiscard]] std::size_t scans_processed() const { return scans_; }
 
@@ -241,7 +243,7 @@ class IncrementalMapper {
     return p;
   }
 
-  SparsePointMap<D, Scalar> map_;
+  SparsePointMap<D, Scalar, Index> map_;
   KeyFrameSelector<D, Scalar> key_frames_;
   transform_type pose_ = transform_type::Identity();
   std::optional<transform_type> last_odometry_;
