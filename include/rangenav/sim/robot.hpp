@@ -77,28 +77,45 @@ struct Footprint {
   }
 };
 
+namespace footprint_geometry {
+using FootprintPoint = boost::geometry::model::d2::point_xy<double>;
+using FootprintPolygon =
+    boost::geometry::model::polygon<FootprintPoint, false, true>;  // CCW, closed
+
+inline FootprintPoint footprint_point(const Point2d& v) {
+  return {v.x(), v.y()};
+}
+
+/// The rectangle with centre c, half extents `half` and yaw, as a closed polygon.
+inline FootprintPolygon footprint_rect(const Point2d& c, const Point2d& half, double yaw) {
+  const Eigen::Rotation2Dd r(yaw);
+  FootprintPolygon poly;
+  for (const auto& [sx, sy] :
+       {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}, {-1.0, -1.0}})
+    poly.outer().push_back(footprint_point(c + r * Point2d(sx * half.x(), sy * half.y())));
+  return poly;
+}
+
+/// A rectangular footprint's body at a pose.
+inline FootprintPolygon footprint_body(const Footprint& fp, const Pose2d& pose) {
+  return footprint_rect(pose.transform_point({fp.x_offset, 0}), {fp.length / 2, fp.width / 2},
+                        pose.theta);
+}
+}  // namespace footprint_geometry
+
 /// The primitives a footprint at a pose touches (holes: the footprint is over a lowered floor).
 [[nodiscard]] inline std::vector<PrimitiveRef> footprint_contacts(const World& world,
                                                                   const Footprint& fp,
                                                                   const Pose2d& pose) {
   namespace bg = boost::geometry;
-  using P = bg::model::d2::point_xy<double>;
-  using Polygon = bg::model::polygon<P, false, true>;  // counter-clockwise, closed
+  using P = footprint_geometry::FootprintPoint;
+  using Polygon = footprint_geometry::FootprintPolygon;
   using Segment = bg::model::segment<P>;
-  const auto to_p = [](const Point2d& v) { return P(v.x(), v.y()); };
-  const auto rect = [&](const Point2d& c, const Point2d& half, double yaw) {
-    const Eigen::Rotation2Dd r(yaw);
-    Polygon poly;
-    for (const auto& [sx, sy] :
-         {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}, {-1.0, -1.0}})
-      poly.outer().push_back(to_p(c + r * Point2d(sx * half.x(), sy * half.y())));
-    return poly;
-  };
+  const auto to_p = footprint_geometry::footprint_point;
+  const auto rect = footprint_geometry::footprint_rect;
   const bool circle = fp.shape == Footprint::Shape::circle;
   const P centre(pose.x, pose.y);
-  Polygon body;
-  if (!circle)
-    body = rect(pose.transform_point({fp.x_offset, 0}), {fp.length / 2, fp.width / 2}, pose.theta);
+  const Polygon body = circle ? Polygon{} : footprint_geometry::footprint_body(fp, pose);
   const auto touches_polygon = [&](const Polygon& poly) {
     return circle ? bg::distance(centre, poly) <= fp.radius : bg::intersects(body, poly);
   };
@@ -155,23 +172,14 @@ struct Footprint {
 [[nodiscard]] inline double footprint_clearance(const World& world, const Footprint& fp,
                                                 const Pose2d& pose, double max_distance = 1.0) {
   namespace bg = boost::geometry;
-  using P = bg::model::d2::point_xy<double>;
-  using Polygon = bg::model::polygon<P, false, true>;  // counter-clockwise, closed
+  using P = footprint_geometry::FootprintPoint;
+  using Polygon = footprint_geometry::FootprintPolygon;
   using Segment = bg::model::segment<P>;
-  const auto to_p = [](const Point2d& v) { return P(v.x(), v.y()); };
-  const auto rect = [&](const Point2d& c, const Point2d& half, double yaw) {
-    const Eigen::Rotation2Dd r(yaw);
-    Polygon poly;
-    for (const auto& [sx, sy] :
-         {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}, {-1.0, -1.0}})
-      poly.outer().push_back(to_p(c + r * Point2d(sx * half.x(), sy * half.y())));
-    return poly;
-  };
+  const auto to_p = footprint_geometry::footprint_point;
+  const auto rect = footprint_geometry::footprint_rect;
   const bool circle = fp.shape == Footprint::Shape::circle;
   const P centre(pose.x, pose.y);
-  Polygon body;
-  if (!circle)
-    body = rect(pose.transform_point({fp.x_offset, 0}), {fp.length / 2, fp.width / 2}, pose.theta);
+  const Polygon body = circle ? Polygon{} : footprint_geometry::footprint_body(fp, pose);
   // Distance from the footprint to a geometry: a disc's is the centre's minus the radius.
   const auto distance = [&](const auto& geometry) {
     return circle ? bg::distance(centre, geometry) - fp.radius : bg::distance(body, geometry);
