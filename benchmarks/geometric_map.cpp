@@ -17,12 +17,16 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <span>
 #include <vector>
 
+#include "rangenav/geometry/euclidean_clustering.hpp"
+#include "rangenav/geometry/plane_extraction.hpp"
 #include "rangenav/geometry/voxel_grid.hpp"
 #include "rangenav/mapping/geometric_map.hpp"
 #include "rangenav/mapping/geometric_mapper.hpp"
 #include "rangenav/scan/depth_image.hpp"
+#include "rangenav/search/kd_tree.hpp"
 #include "rangenav/sim/sensors.hpp"
 #include "rangenav/sim/worlds.hpp"
 
@@ -128,6 +132,75 @@ void BM_plane_extraction(benchmark::State& state) {
   state.counters["points"] = static_cast<double>(points);
 }
 
+/// The aligned second frame in world coordinates, organised (640 x 480, NaN where no return).
+const std::vector<Point3d>& second_world_organized() {
+  static const std::vector<Point3d> out = [] {
+    const Frames& f = frames();
+    std::vector<Point3d> w(f.second.points.size());
+    for (std::size_t i = 0; i < w.size(); ++i)
+      w[i] = f.second_pose * f.second.points[i];
+    return w;
+  }();
+  return out;
+}
+
+/// Clustering alone, full resolution: kd-tree radius queries (Arg 0) or image neighbours (1).
+void BM_clustering(benchmark::State& state) {
+  const Frames& f = frames();
+  const auto p = params(0);
+  const std::vector<Point3d>& world = second_world_organized();
+  std::size_t clusters = 0;
+  for (auto _ : state) {
+    if (state.range(0) == 0) {
+      std::vector<Point3d> finite;
+      finite.reserve(world.size());
+      for (const Point3d& q : world)
+        if (q.allFinite()) finite.push_back(q);
+      const KdTree<3, double> tree(std::move(finite));
+      clusters = euclidean_clusters(tree, p.clustering).size();
+    } else {
+      clusters = organized_euclidean_clusters(std::span<const Point3d>(world), f.second.width,
+                                              f.second.height, p.clustering)
+                     .size();
+    }
+  }
+  state.counters["clusters"] = static_cast<double>(clusters);
+}
+
+/// The whole extraction at full resolution on the organised frame: transform to the world,
+/// clustering over image neighbours, iterative RANSAC + refit + alpha-shape hulls per cluster.
+void BM_plane_extraction_organized(benchmark::State& state) {
+  const Frames& f = frames();
+  auto p = params(0);
+  p.planes.hull.thinning = static_cast<double>(state.range(0)) / 100.0;
+  PlaneExtractor extractor(p.planes);
+  extractor.set_viewpoint(Point3d(f.second_pose.translation()));
+  std::vector<Point3d> world(f.second.points.size());
+  std::vector<ExtractedPlane> planes;
+  std::size_t clusters = 0;
+  double area = 0;
+  for (auto _ : state) {
+    std::mt19937 rng(7);
+    for (std::size_t i = 0; i < world.size(); ++i)
+      world[i] = f.second_pose * f.second.points[i];
+    const auto found = organized_euclidean_clusters(std::span<const Point3d>(world), f.second.width,
+                                                    f.second.height, p.clustering);
+    clusters = found.size();
+    planes.clear();
+    for (const auto& cluster : found)
+      extractor.extract(std::span<const Point3d>(world), cluster, rng, planes);
+  }
+  area = 0;
+  for (const auto& e : planes)
+    area += e.shape.area();
+  state.counters["planes"] = static_cast<double>(planes.size());
+  state.counters["clusters"] = static_cast<double>(clusters);
+  state.counters["area_m2"] = area;
+  state.counters["inliers"] = 0;
+  for (const auto& e : planes)
+    state.counters["inliers"] += static_cast<double>(e.inliers);
+}
+
 void BM_merging(benchmark::State& state) {
   // The second key frame's planes merged into a map holding the first key frame's.
   const Frames& f = frames();
@@ -213,6 +286,13 @@ BENCHMARK(BM_pcl_extraction)->Arg(0)->Arg(20)->Unit(benchmark::kMillisecond);
 #endif
 
 BENCHMARK(BM_registration)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_clustering)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_plane_extraction_organized)
+    ->Arg(0)
+    ->Arg(25)
+    ->Arg(35)
+    ->Arg(50)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_plane_extraction)->Arg(0)->Arg(20)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_merging)->Unit(benchmark::kMillisecond);
 

@@ -6,14 +6,19 @@
 //   - a SwissRanger SR4000-like time-of-flight camera tilted down (0.5 Hz).
 // It records the true path, the odometry and the scans, counts what each sensor perceives of
 // the obstacles a 2D laser cannot see, maps the apartment online from the 2D laser scans and the
-// odometry (incremental SLAM with a sparse point map, paper 000 §3), and draws everything into
-// demo_out/world.svg.
-// Then it closes the loop (run_navigation): from the hallway to the dresser in the kitchen, a
-// named object of the topological map, planned on the Voronoi graph of the 2D map, followed with
-// Indiveri's path tracker and pose controller, with the reactive behaviours on the pitching
-// scanner's obstacle map; a box blocks the corridor after planning, the latest scan shows it on
-// the path, its edge is blocked and the path re-planned (demo_out/navigation.svg, paper 000
-// Fig. 6a). The JSON reports goal_reached (10 cm, 5 deg), replans, min_clearance_m and contacts.
+// odometry (incremental SLAM with a sparse point map, paper 000 §3), steering the tour by that
+// SLAM estimate, and draws everything into demo_out/world.svg.
+// Then it closes the loop on that map (run_navigation): back at its start in the hallway, the
+// robot plans to the dresser in the kitchen, a named object of the topological map, on the
+// pruned Voronoi graph of the SLAM sparse point map; it localizes on that map while driving
+// (odometry prediction, each 2D scan registered against the map with the SLAM setup's ICP) and
+// follows the path with Indiveri's path tracker and pose controller steering by that estimate,
+// with the reactive behaviours on the pitching scanner's obstacle map. A box blocks the corridor
+// after planning; the latest scan shows it on the path, its edge is blocked and the path
+// re-planned (demo_out/navigation.svg: SLAM map, pruned graph, plans, driven trajectory, paper 000
+// Fig. 6a). The simulator's truth only scores the run: the JSON reports goal_reached (true pose
+// within 10 cm and 5 deg), replans, min_clearance_m, contacts and the localization error
+// nav_pose_rmse_m.
 //
 // Usage:  00_demo                 run the tour (what `cmake --workflow --preset demo` does)
 //         00_demo --docs <dir>    also draw the three built-in worlds into <dir>/*.svg
@@ -62,13 +67,13 @@ std::vector<Point2d> box_outline(const Box& b) {
 
 /// Draws a world: walls, doors, the stair, and the solids coloured by whether a 2D laser at
 /// `scan_height` can see them (their z-range contains that height) or not (Fig. 2 of paper 002).
-void draw_world(io::SvgDrawing& svg, const World& w, double scan_height) {
-  const io::Style seen{.stroke = "#555", .fill = "#c8c8c8"};
-  const io::Style unseen{.stroke = "#d35400", .fill = "#f5b041"};
+void draw_world(io::SvgDrawing& svg, const World& w, double scan_height, double opacity = 1.0) {
+  const io::Style seen{.stroke = "#555", .fill = "#c8c8c8", .opacity = opacity};
+  const io::Style unseen{.stroke = "#d35400", .fill = "#f5b041", .opacity = 0.8 * opacity};
   svg.layer("stair (floor below z = 0)");
   for (const FloorHole& h : w.holes())
     svg.polygon(box_outline({h.center, h.size, h.yaw, 0, 1}),
-                {.stroke = "#2e86c1", .fill = "#aed6f1"});
+                {.stroke = "#2e86c1", .fill = "#aed6f1", .opacity = opacity});
   svg.layer("solids in the 2D scan plane");
   for (const Box& b : w.boxes())
     if (b.z_min <= scan_height && b.z_max >= scan_height) svg.polygon(box_outline(b), seen);
@@ -76,16 +81,16 @@ void draw_world(io::SvgDrawing& svg, const World& w, double scan_height) {
     if (c.z_min <= scan_height && c.z_max >= scan_height) svg.circle(c.center, c.radius, seen);
   svg.layer("solids above or below the 2D scan plane");
   for (const Box& b : w.boxes())
-    if (!(b.z_min <= scan_height && b.z_max >= scan_height))
-      svg.polygon(box_outline(b), {.stroke = unseen.stroke, .fill = unseen.fill, .opacity = 0.8});
+    if (!(b.z_min <= scan_height && b.z_max >= scan_height)) svg.polygon(box_outline(b), unseen);
   for (const Cylinder& c : w.cylinders())
     if (!(c.z_min <= scan_height && c.z_max >= scan_height)) svg.circle(c.center, c.radius, unseen);
   svg.layer("doors");
   for (const Door& d : w.doors())
-    svg.polygon(box_outline(d.leaf()), {.stroke = "#6e2c00", .fill = "#a04000"});
+    svg.polygon(box_outline(d.leaf()),
+                {.stroke = "#6e2c00", .fill = "#a04000", .opacity = opacity});
   svg.layer("walls");
   for (const Wall& wall : w.walls())
-    svg.segment(wall.a, wall.b, {.stroke = "black", .stroke_width_px = 2.5});
+    svg.segment(wall.a, wall.b, {.stroke = "black", .stroke_width_px = 2.5, .opacity = opacity});
 }
 
 /// Turn-then-drive waypoint follower (the real path trackers come with the control issue).
@@ -132,56 +137,120 @@ void write_docs(const std::filesystem::path& dir) {
   draw(kitchen(), "kitchen");
 }
 
+// ---- mapping and localization (paper 000 §3) ---------------------------------------------------
+
+// Online SLAM: every 2D laser scan goes to the incremental mapper with the odometry pose as it
+// arrives (LaserSlamMapper, the documented 2D laser setup). Its map frame is the robot's frame at
+// the first scan; odometry knows that pose in the frame where the robot started (the world frame
+// of the start pose), so `origin` places the map in the world without the simulator's truth. The
+// absolute trajectory error is the RMS of the position errors over all scans.
+struct OnlineSlam {
+  LaserSlamMapper<double> mapper{laser_slam_params<double>()};
+  Pose2d origin;                        ///< the map frame in the world (odometry at the first scan)
+  std::vector<Pose2d> estimate, truth;  // world frame
+  double cpu_seconds = 0;
+
+  void add(const LaserScan<double>& scan, const Pose2d& odometry, const Pose2d& true_pose) {
+    if (truth.empty()) origin = odometry;
+    const auto start = std::chrono::steady_clock::now();
+    const auto update = mapper.process(scan, odometry.to_isometry());
+    cpu_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    truth.push_back(true_pose);
+    estimate.push_back(compose(origin, Pose2d::from_isometry(update.pose)));
+  }
+  /// Evaluated as usual with the estimated trajectory aligned to the truth at the first scan
+  /// (the map's placement through odometry adds its own small error, seen in the navigation).
+  [[nodiscard]] double ate_rmse() const {
+    double sum_sq = 0;
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      const Pose2d aligned = compose(truth.front(), relative(origin, estimate[i]));
+      sum_sq += (aligned.position() - truth[i].position()).squaredNorm();
+    }
+    return truth.empty() ? 0.0 : std::sqrt(sum_sq / static_cast<double>(truth.size()));
+  }
+  /// The sparse point map in the world frame (the map the navigation plans on).
+  [[nodiscard]] std::vector<Point2d> world_map() const {
+    std::vector<Point2d> map;
+    for (const Point2d& p : mapper.map().points())
+      map.push_back(origin.transform_point(p));
+    return map;
+  }
+  void draw(io::SvgDrawing& svg) const {
+    if (truth.empty()) return;
+    svg.layer("SLAM sparse map").points(world_map(), {.stroke = "#d35400", .point_radius_px = 1.3});
+    svg.layer("SLAM estimated path").path(estimate, {.stroke = "#c0392b", .stroke_width_px = 1.5});
+  }
+};
+
+/// Localization on the finished SLAM map while driving: odometry increments predict the pose at
+/// every control step, and each 2D scan is registered against the sparse point map with the map
+/// ICP of the SLAM setup (point-to-line on the map's normals, 0.5 -> 0.2 m decaying threshold),
+/// starting from that prediction (paper 000 §3.2, the tracking half of the incremental mapper).
+/// A registration is accepted under the mapper's rules: converged (or degenerate with its
+/// constrained directions), fitness >= 0.3, and a correction of the prediction below 0.5 m / 3 deg.
+struct MapLocalizer {
+  const SparsePointMap<2, double>& map;
+  Pose2d origin;  ///< the map frame in the world
+  LaserIcp<double> icp{};
+  Pose2d estimate;  ///< world frame
+  Pose2d last_odometry;
+  std::size_t accepted = 0, rejected = 0;
+
+  MapLocalizer(const OnlineSlam& slam, const Pose2d& initial, const Pose2d& odometry)
+      : map(slam.mapper.map()), origin(slam.origin), estimate(initial), last_odometry(odometry) {
+    auto& decaying = icp.rejector<DecayingDistanceRejector<double>>();
+    decaying.initial_distance = 0.5;
+    decaying.final_distance = 0.2;
+    icp.solver.model_normals = map.normals();
+  }
+  void predict(const Pose2d& odometry) {
+    estimate = compose(estimate, relative(last_odometry, odometry));
+    last_odometry = odometry;
+  }
+  void correct(const LaserScan<double>& scan) {
+    const Pose2d guess = relative(origin, estimate);  // in the map frame
+    const auto r = icp.align(map.search(), scan, guess.to_isometry());
+    const Pose2d found = Pose2d::from_isometry(r.transform);
+    const Pose2d correction = relative(guess, found);
+    const bool usable = r.reason == IcpTermination::converged ||
+                        r.reason == IcpTermination::max_iterations ||
+                        (r.reason == IcpTermination::degenerate && r.smallest_eigenvalue);
+    if (usable && r.fitness >= 0.3 && correction.position().norm() <= 0.5 &&
+        std::abs(correction.theta) <= deg_to_rad(3.0)) {
+      estimate = compose(origin, found);
+      ++accepted;
+    } else {
+      ++rejected;
+    }
+  }
+};
+
 // ---- closed-loop navigation (papers 000 §4-5, 002 §5, 003 §2.2) --------------------------------
 
-/// The 2D map a laser at height z would build of `world`: every wall, box, cylinder and door leaf
-/// that cuts the plane z, sampled every `spacing` metres. The true map stands in for the SLAM map.
-std::vector<Point2d> scan_plane_map(const World& world, double z, double spacing) {
-  std::vector<Point2d> pts;
-  const auto line = [&](const Point2d& a, const Point2d& b) {
-    const auto n = static_cast<int>(std::ceil((b - a).norm() / spacing));
-    for (int k = 0; k <= n; ++k)
-      pts.push_back(a + (b - a) * (n == 0 ? 0.0 : double(k) / n));
-  };
-  const auto outline = [&](const Box& b) {
-    const std::vector<Point2d> c = box_outline(b);
-    for (std::size_t i = 0; i < c.size(); ++i)
-      line(c[i], c[(i + 1) % c.size()]);
-  };
-  for (const Wall& w : world.walls())
-    if (w.height >= z) line(w.a, w.b);
-  for (const Box& b : world.boxes())
-    if (b.z_min <= z && b.z_max >= z) outline(b);
-  for (const Door& d : world.doors())
-    outline(d.leaf());
-  for (const Cylinder& c : world.cylinders())
-    if (c.z_min <= z && c.z_max >= z) {
-      const int n = std::max(8, static_cast<int>(2 * std::numbers::pi * c.radius / spacing));
-      for (int k = 0; k < n; ++k) {
-        const double a = 2 * std::numbers::pi * k / n;
-        pts.push_back(c.center + c.radius * Point2d(std::cos(a), std::sin(a)));
-      }
-    }
-  return pts;
-}
-
 struct NavigationResult {
-  bool goal_reached = false;   ///< within 10 cm and 5 degrees of the goal pose
+  bool goal_reached = false;   ///< true pose within 10 cm and 5 degrees of the goal pose
   std::size_t replans = 0;     ///< edges blocked and paths re-planned
   double min_clearance = 1.0;  ///< smallest true footprint-to-obstacle distance on the drive (m)
   std::size_t contacts = 0;    ///< refused steps that started a contact
   double time = 0, distance = 0;
-  double position_error = 0, heading_error = 0;
+  double position_error = 0, heading_error = 0;  ///< true pose vs goal at the end
+  double pose_rmse = 0;         ///< RMS of localization position errors at the scans (m)
+  double pose_max_error = 0;    ///< largest of those (m)
+  double heading_rmse_deg = 0;  ///< RMS of localization heading errors (deg)
+  std::size_t registrations_rejected = 0, registrations = 0;
   std::size_t graph_nodes = 0, graph_edges = 0;
   std::string goal_name;
 };
 
-/// Plans from the hallway to the dresser in the kitchen on the Voronoi graph of the 2D map, follows
-/// the path with Indiveri's tracker, finishes with the pose controller, keeps the roadway clear
-/// with the reactive behaviours on the pitching scanner's obstacle map, and re-plans when the
-/// latest scan shows an obstacle on the path ahead: a box blocks the corridor after planning.
-/// Steers by the true pose (localization is the SLAM issue's). Draws demo_out/navigation.svg.
-NavigationResult run_navigation(const Scene& scene, unsigned seed) {
+/// Plans from the hallway to the dresser in the kitchen on the pruned Voronoi graph of the SLAM
+/// sparse point map the mapping tour built, follows the path with Indiveri's tracker and
+/// finishes with the pose controller, both steering by the pose estimated on that map (odometry
+/// prediction + scan registration, MapLocalizer). The reactive behaviours keep the roadway clear on
+/// the pitching scanner's obstacle map, and the path is re-planned when the latest scan shows an
+/// obstacle on it: a box blocks the corridor after planning. The simulator's truth is used only
+/// to score the run. Draws demo_out/navigation.svg (paper 000 Fig. 6a).
+NavigationResult run_navigation(const Scene& scene, const OnlineSlam& slam,
+                                const DifferentialDriveParams& robot_params, unsigned seed) {
   NavigationResult out;
   // The named goal (paper 000 §1: "go to the refrigerator"): the dresser, its front facing west.
   TopologicalMap places;
@@ -198,14 +267,22 @@ NavigationResult run_navigation(const Scene& scene, unsigned seed) {
   out.goal_name = "dresser";
   const Pose2d goal = places.at(out.goal_name).approach_pose(1.1);
 
-  // Plan on the map the robot knows, with the robot's width and the paper's 5 cm margin.
-  const double radius = 0.3;
-  const std::vector<Point2d> map = scan_plane_map(scene.world, apartment_scan_height, 0.05);
+  // The robot is back on its start pose in the hallway, where the mapping tour began: it knows
+  // that pose (the start of its odometry frame), and the first scan registration refines it.
+  DifferentialDriveRobot robot(robot_params, scene.start);
+  MapLocalizer localizer(slam, scene.start, robot.odometry());
+
+  // Plan on the SLAM map, with the robot's width and the paper's 5 cm margin.
+  const double radius = robot_params.footprint.radius;
+  const std::vector<Point2d> map = slam.world_map();
   VoronoiPathGraph graph(map, {.robot_width = 2 * radius, .safety_margin = 0.05});
   out.graph_nodes = graph.node_count();
   out.graph_edges = graph.edge_count();
-  AStar planner(graph);
-  PlanResult plan = planner.plan(scene.start.position(), goal.position());
+  // The straight connections of start and goal to the graph are checked against the map's
+  // points only, and a wall's end lies up to eps_D beyond its last point: they keep that much more.
+  const double eps_d = slam.mapper.map().params().epsilon_d;
+  AStar planner(graph, {.connection_clearance = graph.params().required_clearance() + eps_d});
+  PlanResult plan = planner.plan(localizer.estimate.position(), goal.position());
   if (!plan.found()) return out;
   const PlannedPath first_plan = plan.path;
 
@@ -215,10 +292,7 @@ NavigationResult run_navigation(const Scene& scene, unsigned seed) {
   world.add_box({{4.4, 5.6}, {0.4, 1.2}, 0.0, 0.0, 0.9});
   world.build_index();
 
-  DifferentialDriveParams rp;
-  rp.footprint = Footprint::circle(radius, 0.02, 1.2);
-  DifferentialDriveRobot robot(rp, scene.start);
-  std::mt19937 rng(seed);
+  std::mt19937 rng(seed), laser_rng(seed + 1);
   const LaserScanner2D laser;
   PitchingScannerParams pitching_params;
   pitching_params.noise.sigma = 0.005;  // SICK LMS 2xx: about 5 mm (1 sigma)
@@ -248,25 +322,37 @@ NavigationResult run_navigation(const Scene& scene, unsigned seed) {
 
   const Transform3d mount = laser.params().mount;
   std::vector<Point2d> scan_points;  // the latest 2D scan in the robot frame
-  std::vector<Pose2d> driven{robot.pose()};
+  std::vector<Pose2d> driven{robot.pose()}, believed{localizer.estimate};
   std::vector<std::uint32_t> blocked;
-  Pose2d previous = robot.pose();
+  Pose2d previous = localizer.estimate;
   std::size_t next_pitched = 0, step = 0;
   bool approaching = false, in_contact = false;
+  double error_sq = 0, heading_sq = 0;
+  std::size_t scored = 0;
   while (robot.time() < 150.0) {
-    const Pose2d pose = robot.pose();
-    // Perception: the pitching scanner's stream into the obstacle map, the 2D laser at 10 Hz.
-    while (pitching.scan_time(next_pitched) <= robot.time()) {
-      const auto ps = pitching.scan(world, pose, pitching.scan_time(next_pitched++), rng);
-      obstacles.update(relative(previous, pose), extractor.push(ps, pose));
-      previous = pose;
-    }
+    localizer.predict(robot.odometry());
+    // Perception: the 2D laser at 10 Hz (registered on the map, then checked against the path),
+    // the pitching scanner's stream into the obstacle map.
     const bool fresh_scan = step++ % 5 == 0;
     if (fresh_scan) {
-      const LaserScan<double> scan = laser.scan(world, pose, rng, robot.time());
+      const LaserScan<double> scan = laser.scan(world, robot.pose(), laser_rng, robot.time());
+      localizer.correct(scan);
       scan_points.clear();
       for (const Point2d& p : scan.valid_points())
         scan_points.push_back((mount * Point3d(p.x(), p.y(), 0.0)).head<2>());
+      // Evaluation only: the estimate against the simulator's truth.
+      const Pose2d& e = localizer.estimate;
+      const double d = (e.position() - robot.pose().position()).norm();
+      error_sq += d * d;
+      heading_sq += std::pow(angle_difference(e.theta, robot.pose().theta), 2);
+      out.pose_max_error = std::max(out.pose_max_error, d);
+      ++scored;
+    }
+    const Pose2d pose = localizer.estimate;
+    while (pitching.scan_time(next_pitched) <= robot.time()) {
+      const auto ps = pitching.scan(world, robot.pose(), pitching.scan_time(next_pitched++), rng);
+      obstacles.update(relative(previous, pose), extractor.push(ps, pose));
+      previous = pose;
     }
     double v = 0, omega = 0;
     if (!approaching) {
@@ -281,7 +367,7 @@ NavigationResult run_navigation(const Scene& scene, unsigned seed) {
         plan = planner.plan(pose.position(), goal.position());
         if (!plan.found()) break;
         tracker.set_path(LocalFramePath(plan.path));
-        continue;
+        cmd = tracker.step(pose);
       }
       if (cmd.replan) cmd = tracker.step(pose);  // on a connection to the graph: nothing to block
       approaching = cmd.finished;
@@ -295,24 +381,35 @@ NavigationResult run_navigation(const Scene& scene, unsigned seed) {
       omega = cmd.omega;
     }
     const ReactiveCommand safe = reactive.apply(v, omega, obstacles);
+    const Pose2d before = robot.pose();
     const StepResult r = robot.step(world, safe.v, safe.omega, rng);
     if (!r.moved && !in_contact) ++out.contacts;
     in_contact = !r.moved;
-    out.distance += (robot.pose().position() - pose.position()).norm();
-    out.min_clearance =
-        std::min(out.min_clearance, footprint_clearance(world, rp.footprint, robot.pose()));
-    if (step % 10 == 0) driven.push_back(robot.pose());
+    out.distance += (robot.pose().position() - before.position()).norm();
+    out.min_clearance = std::min(out.min_clearance,
+                                 footprint_clearance(world, robot_params.footprint, robot.pose()));
+    if (step % 10 == 0) {
+      driven.push_back(robot.pose());
+      believed.push_back(localizer.estimate);
+    }
   }
   driven.push_back(robot.pose());
+  believed.push_back(localizer.estimate);
   out.time = robot.time();
   out.position_error = (robot.pose().position() - goal.position()).norm();
   out.heading_error = std::abs(angle_difference(robot.pose().theta, goal.theta));
   out.goal_reached = out.position_error < 0.10 && out.heading_error < deg_to_rad(5.0);
+  out.pose_rmse = scored == 0 ? 0.0 : std::sqrt(error_sq / static_cast<double>(scored));
+  out.heading_rmse_deg =
+      scored == 0 ? 0.0 : rad_to_deg(std::sqrt(heading_sq / static_cast<double>(scored)));
+  out.registrations = localizer.accepted + localizer.rejected;
+  out.registrations_rejected = localizer.rejected;
 
-  // Paper 000 Fig. 6a: map, pruned graph, planned paths and the driven trajectory.
+  // Paper 000 Fig. 6a: the SLAM map, the pruned graph, the planned paths and the driven
+  // trajectory, over the true world (grey, for reference).
   io::SvgDrawing svg({.size_px = 900});
-  draw_world(svg, world, apartment_scan_height);
-  svg.layer("2D map").points(map, {.stroke = "#555", .point_radius_px = 0.8});
+  draw_world(svg, world, apartment_scan_height, 0.35);
+  svg.layer("SLAM sparse map").points(map, {.stroke = "#d35400", .point_radius_px = 1.6});
   svg.layer("pruned Voronoi graph");
   for (const auto& e : graph.edges())
     svg.segment(graph.nodes()[e.from].position, graph.nodes()[e.to].position,
@@ -325,43 +422,12 @@ NavigationResult run_navigation(const Scene& scene, unsigned seed) {
   svg.layer("first plan")
       .polyline(first_plan.waypoints, {.stroke = "#2874a6", .stroke_width_px = 2});
   svg.layer("last plan").polyline(plan.path.waypoints, {.stroke = "#e67e22", .stroke_width_px = 2});
-  svg.layer("driven").path(driven, {.stroke = "#27ae60", .stroke_width_px = 2.5});
+  svg.layer("driven (true)").path(driven, {.stroke = "#27ae60", .stroke_width_px = 2.5});
+  svg.layer("driven (estimated)").path(believed, {.stroke = "#1e8449", .stroke_width_px = 1});
   svg.layer("goal").pose(goal, 0.4, {.stroke = "#c0392b", .fill = "#c0392b"});
   svg.save("demo_out/navigation.svg");
   return out;
 }
-
-// Online SLAM: every 2D laser scan goes to the incremental mapper with the odometry pose as it
-// arrives (LaserSlamMapper, the documented 2D laser setup). Its map frame is the robot's frame
-// at the first scan, placed in the world at the first true pose for the picture and the
-// absolute trajectory error (RMS of the position errors over all scans).
-struct OnlineSlam {
-  LaserSlamMapper<double> mapper{laser_slam_params<double>()};
-  std::vector<Pose2d> estimate, truth;  // world frame
-  double cpu_seconds = 0;
-
-  void add(const LaserScan<double>& scan, const Pose2d& odometry, const Pose2d& true_pose) {
-    const auto start = std::chrono::steady_clock::now();
-    const auto update = mapper.process(scan, odometry.to_isometry());
-    cpu_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    truth.push_back(true_pose);
-    estimate.push_back(compose(truth.front(), Pose2d::from_isometry(update.pose)));
-  }
-  [[nodiscard]] double ate_rmse() const {
-    double sum_sq = 0;
-    for (std::size_t i = 0; i < truth.size(); ++i)
-      sum_sq += (estimate[i].position() - truth[i].position()).squaredNorm();
-    return truth.empty() ? 0.0 : std::sqrt(sum_sq / static_cast<double>(truth.size()));
-  }
-  void draw(io::SvgDrawing& svg) const {
-    if (truth.empty()) return;
-    std::vector<Point2d> map;
-    for (const Point2d& p : mapper.map().points())
-      map.push_back(truth.front().transform_point(p));
-    svg.layer("SLAM sparse map").points(map, {.stroke = "#d35400", .point_radius_px = 1.3});
-    svg.layer("SLAM estimated path").path(estimate, {.stroke = "#c0392b", .stroke_width_px = 1.5});
-  }
-};
 
 }  // namespace
 
@@ -407,14 +473,16 @@ int main(int argc, char** argv) {
   std::size_t below_floor = 0, tof_mixed_pixels = 0;
   double distance = 0;
   OnlineSlam slam;
+  // The pose the robot steers by: the start (its odometry's origin) until the first scan.
+  Pose2d slam_fix = robot.odometry(), odometry_at_fix = robot.odometry();
   const double max_time = 180.0;
   std::size_t next_pitched = 0, step = 0;
 
   while (!follower.done() && robot.time() < max_time) {
-    // Control at 50 Hz. Odometry alone drifts too much to pass 0.9 m doors on a 60 s tour, and
-    // localization comes with a later issue: until then the demo steers by the simulator's true
-    // pose and only records the odometry.
-    const auto [v, omega] = follower.command(robot.pose());
+    // Control at 50 Hz. Odometry alone drifts too much to pass 0.9 m doors on a 60 s tour: the
+    // tour steers by the SLAM estimate of the last scan, moved on by the odometry since.
+    const Pose2d believed = compose(slam_fix, relative(odometry_at_fix, robot.odometry()));
+    const auto [v, omega] = follower.command(believed);
     const Pose2d before = robot.pose();
     const StepResult r = robot.step(world, v, omega, robot_rng);
     if (!r.moved) ++contacts;
@@ -431,6 +499,8 @@ int main(int argc, char** argv) {
       const LaserScan<double> scan = laser.scan(world, robot.pose(), laser_rng, robot.time());
       ++laser_scans;
       slam.add(scan, robot.odometry(), robot.pose());
+      slam_fix = slam.estimate.back();
+      odometry_at_fix = robot.odometry();
       if (laser_scans % 4 == 0)
         for (const Point2d& p : scan.valid_points())
           laser_points.push_back(robot.pose().transform_point(p));
@@ -501,7 +571,7 @@ int main(int argc, char** argv) {
   svg.save("demo_out/world.svg");
 
   // Closed loop: hallway -> the dresser in the kitchen, a corridor blocked after planning.
-  const NavigationResult nav = run_navigation(scene, seed + 4);
+  const NavigationResult nav = run_navigation(scene, slam, robot_params, seed + 4);
 
   const double runtime =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
@@ -527,7 +597,10 @@ int main(int argc, char** argv) {
             << " s, " << nav.distance << " m, " << nav.replans << " re-plans, " << nav.contacts
             << " contacts, min clearance " << nav.min_clearance << " m, final error "
             << nav.position_error << " m / " << rad_to_deg(nav.heading_error) << " deg ("
-            << nav.graph_nodes << " graph nodes, " << nav.graph_edges << " edges)\n"
+            << nav.graph_nodes << " graph nodes, " << nav.graph_edges << " edges on the SLAM map)\n"
+            << "  localization on the map " << nav.pose_rmse << " m / " << nav.heading_rmse_deg
+            << " deg RMS error (max " << nav.pose_max_error << " m), " << nav.registrations_rejected
+            << " of " << nav.registrations << " scan registrations rejected\n"
             << "  wrote demo_out/world.svg and demo_out/navigation.svg (in "
             << std::filesystem::current_path().string() << ")\n";
   std::printf(
@@ -540,11 +613,13 @@ int main(int argc, char** argv) {
       "\"tof_frames\": %zu, \"tof_mixed_pixels\": %zu, \"slam_ate_rmse_m\": %.4f, "
       "\"slam_map_points\": %zu, \"goal_reached\": %s, \"replans\": %zu, "
       "\"min_clearance_m\": %.3f, \"contacts\": %zu, \"nav_time_s\": %.2f, "
-      "\"nav_position_error_m\": %.4f, \"nav_heading_error_deg\": %.2f, \"runtime_s\": %.3f}\n",
+      "\"nav_position_error_m\": %.4f, \"nav_heading_error_deg\": %.2f, \"nav_pose_rmse_m\": %.4f, "
+      "\"nav_pose_max_error_m\": %.4f, \"nav_heading_rmse_deg\": %.2f, \"runtime_s\": %.3f}\n",
       follower.next, scene.tour.size(), robot.time(), distance, contacts, odometry_error,
       laser_scans, laser_on_table_legs, laser_on_table_top, pitched_scans, pitching_on_table_top,
       pitching_on_drawer, below_floor, tof_frames, tof_mixed_pixels, slam.ate_rmse(),
       slam.mapper.map().size(), nav.goal_reached ? "true" : "false", nav.replans, nav.min_clearance,
-      nav.contacts, nav.time, nav.position_error, rad_to_deg(nav.heading_error), runtime);
+      nav.contacts, nav.time, nav.position_error, rad_to_deg(nav.heading_error), nav.pose_rmse,
+      nav.pose_max_error, nav.heading_rmse_deg, runtime);
   return follower.done() && contacts == 0 && nav.goal_reached && nav.contacts == 0 ? 0 : 1;
 }

@@ -69,6 +69,7 @@
 #include "rangenav/search/grid_index.hpp"
 #include "rangenav/search/kd_tree.hpp"
 #include "rangenav/search/nearest_neighbor_search.hpp"
+#include "rangenav/sim/motor.hpp"
 #include "rangenav/sim/robot.hpp"
 #include "rangenav/sim/sensors.hpp"
 #include "rangenav/sim/world.hpp"

@@ -8,6 +8,7 @@
 
 #include "rangenav/control/motor_control.hpp"
 #include "rangenav/control/reactive.hpp"
+#include "rangenav/sim/motor.hpp"
 
 using Catch::Matchers::Equals;
 using rangenav::Point2d;
@@ -146,17 +147,11 @@ rangenav::SpeedPwmTable measured_table() {
   return {pwm, speed};
 }
 
-// A first-order (PT1) motor: tau v' = K T(pwm) - offset - v (paper 003 Fig. 2, left).
-struct Pt1Motor {
-  double tau = 0.15, gain = 1.0, load_offset = 0.2, v = 0.0;
-  double step(const rangenav::SpeedPwmTable& t, double pwm, double dt) {
-    const double steady =
-        pwm == 0.0 ? 0.0
-                   : std::copysign(std::max(0.0, gain * std::abs(t.speed(pwm)) - load_offset), pwm);
-    v += (steady - v) * (1.0 - std::exp(-dt / tau));
-    return v;
-  }
-};
+// The simulator's first-order (PT1) motor on the table's characteristic (paper 003 Fig. 2, left).
+rangenav::sim::Pt1Motor pt1_motor(const rangenav::SpeedPwmTable& t, double gain = 1.0) {
+  return rangenav::sim::Pt1Motor([&t](double u) { return t.speed(u); },
+                                 {.time_constant = 0.15, .gain = gain, .load_offset = 0.2});
+}
 
 }  // namespace
 
@@ -192,26 +187,27 @@ TEST_CASE("motor: feed-forward + PI tracks speed steps on a PT1 motor") {
     rangenav::MotorControllerParams ff_only_params = params;
     ff_only_params.kp = ff_only_params.ki = 0.0;
     rangenav::MotorController ff_only(table, ff_only_params);
-    Pt1Motor motor{.gain = battery}, open{.gain = battery};
+    rangenav::sim::Pt1Motor motor = pt1_motor(table, battery), open = pt1_motor(table, battery);
     double previous = 0.0;
     for (const double set : {1.0, 2.5, 0.5, -1.0}) {
       const double direction = set > previous ? 1.0 : -1.0;
       double overshoot = 0.0;
       for (int k = 0; k < 300; ++k) {  // 3 s per step
-        const double u = pi_control.step(set, motor.v);
+        const double u = pi_control.step(set, motor.speed());
         REQUIRE(std::abs(u) <= 1023.0);
-        motor.step(table, u, dt);
-        open.step(table, ff_only.step(set, open.v), dt);
-        overshoot = std::max(overshoot, (motor.v - set) * direction);
+        motor.step(u, dt);
+        open.step(ff_only.step(set, open.speed()), dt);
+        overshoot = std::max(overshoot, (motor.speed() - set) * direction);
       }
       INFO("battery " << battery << ", set " << set);
-      CHECK(motor.v == Approx(set).epsilon(0.01).margin(0.01));  // within 1 % after 3 s
-      CHECK(overshoot <= 0.1 * std::abs(set - previous));        // small overshoot
+      CHECK(motor.speed() == Approx(set).epsilon(0.01).margin(0.01));  // within 1 % after 3 s
+      CHECK(overshoot <= 0.1 * std::abs(set - previous));              // small overshoot
       previous = set;
       if (battery == 1.0)
-        CHECK(open.v == Approx(set).margin(0.01));  // feed-forward alone hits the working point
+        CHECK(open.speed() ==
+              Approx(set).margin(0.01));  // feed-forward alone hits the working point
       else
-        CHECK(std::abs(open.v - set) > 0.05);  // ... but not with a weak battery
+        CHECK(std::abs(open.speed() - set) > 0.05);  // ... but not with a weak battery
     }
   }
   rangenav::MotorControllerParams bad;
@@ -245,17 +241,14 @@ TEST_CASE("motor: the F_omega feed-forward term compensates the turning friction
       // Closed form: T^-1(F_v v + side F_omega omega + offset).
       CHECK(control.feed_forward(v_set, omega) ==
             Approx(table.pwm(v_set + side * f_omega * omega + 0.2)));
-      Pt1Motor motor;
-      for (int k = 0; k < 300; ++k) {
-        const double u = control.step(v_set, motor.v, omega);
-        const double steady = table.speed(u) - 0.2 - side * c * omega;
-        motor.v += (steady - motor.v) * (1.0 - std::exp(-dt / motor.tau));
-      }
+      rangenav::sim::Pt1Motor motor = pt1_motor(table);
+      for (int k = 0; k < 300; ++k)
+        motor.step(control.step(v_set, motor.speed(), omega), dt, side * c * omega);
       INFO("side " << side << ", F_omega " << f_omega);
       if (f_omega == c)
-        CHECK(motor.v == Approx(v_set).margin(1e-6));  // hits the set speed while turning
+        CHECK(motor.speed() == Approx(v_set).margin(1e-6));  // hits the set speed while turning
       else
-        CHECK(motor.v == Approx(v_set - side * c * omega).margin(1e-6));  // misses by c omega
+        CHECK(motor.speed() == Approx(v_set - side * c * omega).margin(1e-6));  // misses by c omega
     }
   }
   // Driving straight, the term vanishes.

@@ -9,8 +9,11 @@
 #include <numbers>
 #include <numeric>
 #include <random>
+#include <span>
+#include <tuple>
 #include <vector>
 
+#include "rangenav/core/cloud.hpp"
 #include "rangenav/core/error.hpp"
 #include "rangenav/geometry/concave_hull.hpp"
 #include "rangenav/geometry/euclidean_clustering.hpp"
@@ -108,6 +111,73 @@ TEST_CASE("euclidean_clusters keeps known clusters within the size bounds", "[ge
       euclidean_clusters(tree, {0.1, 10, 5}),
       "rangenav: euclidean_clusters: argument 'params.max_cluster_size' = 5 must be >= "
       "params.min_cluster_size = 10");
+}
+
+TEST_CASE("organized_euclidean_clusters equals kd-tree clustering on an organised frame",
+          "[geometry]") {
+  // A 120 x 90 depth-camera-like frame (pixel pitch 1 cm at the surfaces, depth noise 2 mm):
+  // a back wall at x = 3, a box face 0.3 m in front of it, a thin pole 0.1 m in front of the
+  // wall, a row of isolated returns, and NaN pixels (no return) in a stripe and at random.
+  const std::size_t width = 120, height = 90;
+  std::mt19937 rng(4);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  Cloud<3, double> cloud;
+  cloud.width = width;
+  cloud.height = height;
+  for (std::size_t r = 0; r < height; ++r)
+    for (std::size_t c = 0; c < width; ++c) {
+      const double y = 0.01 * double(c), z = 0.01 * double(r);
+      double x = 3.0;
+      if (c >= 20 && c < 50 && r >= 10 && r < 60) x = 2.7;  // box
+      if (c >= 80 && c < 83) x = 2.9;                       // pole, full height
+      Point3d p(x + noise(rng), y, z);
+      if (r == 70 && c % 7 == 0) p.x() = 1.0 + 0.01 * double(c);  // isolated returns
+      if ((c >= 60 && c < 63 && r < 40) || u(rng) < 0.02) p = Point3d::Constant(nan);
+      cloud.points.push_back(p);
+    }
+  std::vector<Point3d> finite;
+  std::vector<std::uint32_t> frame_index;
+  for (std::size_t i = 0; i < cloud.points.size(); ++i)
+    if (cloud.points[i].allFinite()) {
+      finite.push_back(cloud.points[i]);
+      frame_index.push_back(static_cast<std::uint32_t>(i));
+    }
+  const KdTree<3, double> tree(finite);
+  for (const EuclideanClusteringParams params :
+       {EuclideanClusteringParams{0.025, 1, 1000000}, EuclideanClusteringParams{0.025, 50, 3000}}) {
+    auto reference = euclidean_clusters(tree, params);
+    for (auto& cluster : reference)  // kd-tree indices -> frame indices
+      for (auto& i : cluster)
+        i = frame_index[i];
+    const auto organised = organized_euclidean_clusters(cloud, params);
+    CHECK(sorted_clusters(organised) == sorted_clusters(reference));
+    for (std::size_t i = 1; i < organised.size(); ++i)
+      CHECK(organised[i - 1].size() >= organised[i].size());
+    for (const auto& cluster : organised)
+      CHECK(std::is_sorted(cluster.begin(), cluster.end()));
+  }
+  // The wall left and right of the full-height pole (the NaN stripe ends at row 40 and splits
+  // nothing), the box, the pole and 18 isolated returns.
+  const auto all = organized_euclidean_clusters(cloud, {0.025, 1, 1000000});
+  CHECK(all.size() == 4 + 18);
+  CHECK(organized_euclidean_clusters(cloud, {0.025, 100, 1000000}).size() == 4);
+  // Bad input.
+  const std::vector<Point3d> six(6, Point3d::Zero());
+  CHECK_THROWS_WITH(organized_euclidean_clusters(std::span<const Point3d>(six), 4, 2),
+                    "rangenav: organized_euclidean_clusters: argument 'width*height' = 8 must "
+                    "equal points.size() = 6");
+  Cloud<3, double> flat;
+  flat.points = six;
+  flat.width = 6;
+  CHECK_THROWS_WITH(organized_euclidean_clusters(flat),
+                    "rangenav: organized_euclidean_clusters: argument 'cloud.height' = 1 must be > "
+                    "1 (an organised cloud)");
+  CHECK_THROWS_WITH(
+      organized_euclidean_clusters(cloud, {-1.0, 1, 10}),
+      "rangenav: organized_euclidean_clusters: argument 'params.tolerance' = -1 must be finite "
+      "and > 0");
 }
 
 // ---- concave hull -------------------------------------------------------------------------
@@ -226,6 +296,53 @@ TEST_CASE("concave_hull separates pieces and handles degenerate input", "[geomet
                     "rangenav: ConcaveHull: argument 'params.alpha' = -1 must be finite and > 0");
 }
 
+TEST_CASE("concave_hull interior thinning keeps the shape, its holes, pieces and areas",
+          "[geometry]") {
+  // Jittered samples every 5 mm of: a 1.2 m x 0.8 m rectangle with a 0.3 m disc hole, a 0.4 m
+  // disc 0.2 m to its right and an L-shaped bay cut into its lower edge.
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> jitter(-0.002, 0.002);
+  const auto inside = [](const Point2d& p) {
+    const bool rect = p.x() >= 0 && p.x() <= 1.2 && p.y() >= 0 && p.y() <= 0.8;
+    const bool hole = (p - Point2d(0.4, 0.4)).norm() < 0.15;
+    const bool bay = p.x() > 0.8 && p.x() < 1.0 && p.y() < 0.3 && !(p.x() > 0.9 && p.y() < 0.2);
+    const bool disc = (p - Point2d(1.6, 0.4)).norm() <= 0.2;
+    return (rect && !hole && !bay) || disc;
+  };
+  std::vector<Point2d> pts;
+  for (int i = -10; i <= 370; ++i)
+    for (int j = -10; j <= 170; ++j) {
+      const Point2d p(0.005 * i + jitter(rng), 0.005 * j + jitter(rng));
+      if (inside(p)) pts.push_back(p);
+    }
+  std::vector<std::int32_t> piece_full, piece_thin;
+  ConcaveHullParams params{0.05, 0.001, 0.0};
+  const auto full = ConcaveHull(params).compute(pts, &piece_full);
+  for (const double thinning : {0.25, 0.5}) {
+    params.thinning = thinning;
+    const auto thin = ConcaveHull(params).compute(pts, &piece_thin);
+    REQUIRE(full.size() == 2);
+    REQUIRE(thin.size() == 2);
+    for (std::size_t k = 0; k < 2; ++k) {
+      CHECK(thin[k].holes.size() == full[k].holes.size());
+      CHECK(thin[k].area() == Approx(full[k].area()).epsilon(0.003));
+      CHECK(is_simple_ccw(thin[k].outer));
+    }
+    // The boundary is made of points kept as they are: far fewer sites, same outline within a
+    // few millimetres (every vertex of the thinned outline is an input point near the full one).
+    CHECK(thin[0].outer.size() < full[0].outer.size());
+    CHECK(thin[0].holes.size() == 1);
+    std::size_t same = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      same += piece_thin[i] == piece_full[i] ? 1 : 0;
+    CHECK(double(same) >= 0.999 * double(pts.size()));
+  }
+  CHECK(full[0].area() == Approx(1.2 * 0.8 - std::numbers::pi * 0.15 * 0.15 - 0.04).epsilon(0.01));
+  params.thinning = 0.75;
+  CHECK_THROWS_WITH(ConcaveHull(params),
+                    "rangenav: ConcaveHull: argument 'params.thinning' = 0.75 must be in [0, 0.5]");
+}
+
 // ---- plane extraction ---------------------------------------------------------------------
 
 namespace {
@@ -328,6 +445,34 @@ TEST_CASE("PlaneExtractor honours the orientation constraint and is deterministi
   REQUIRE(only.size() == 1);
   CHECK(only[0].inliers == 625);
   CHECK(find_plane(only, {0, 0, 1}, -0.7) != nullptr);
+}
+
+TEST_CASE("PlaneExtractor scores hypotheses on a subset and finds the same planes", "[geometry]") {
+  // The room corner with the hypotheses scored on 300 points, on 2000 (the default) and on all:
+  // the same three planes, inliers and outlines within a few percent.
+  const auto pts = room_corner(0.005, 11);
+  std::vector<std::vector<ExtractedPlane>> runs;
+  for (const std::size_t subset : {std::size_t{0}, std::size_t{300}, std::size_t{2000}}) {
+    PlaneExtractionParams params;
+    params.min_inliers = 200;
+    params.evaluation_subset = subset;
+    PlaneExtractor extractor(params);
+    std::mt19937 rng(3);
+    runs.emplace_back();
+    extractor.extract(pts, rng, runs.back());
+  }
+  for (const auto& planes : runs) {
+    REQUIRE(planes.size() == 3);
+    for (const auto& [normal, d, inliers, area] :
+         {std::tuple{Point3d(0, 0, 1), 0.0, 81 * 81, 4.0},
+          std::tuple{Point3d(1, 0, 0), 0.0, 81 * 61, 3.0},
+          std::tuple{Point3d(0, 0, 1), -0.7, 25 * 25, 0.36}}) {
+      const auto* plane = find_plane(planes, normal, d);
+      REQUIRE(plane != nullptr);
+      CHECK(double(plane->inliers) == Approx(inliers).epsilon(0.03));
+      CHECK(plane->shape.area() == Approx(area).epsilon(0.06));
+    }
+  }
 }
 
 TEST_CASE("PlaneExtractor stops on small clusters and rejects bad input", "[geometry]") {

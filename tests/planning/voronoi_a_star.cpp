@@ -176,7 +176,7 @@ TEST_CASE("voronoi graph: pruning keeps exactly the clear edges inside the hull"
 TEST_CASE("voronoi graph: real occupancy maps (EVG-THIN test1 / test2)") {
   for (const char* name : {"evg-thin/test1.pgm", "evg-thin/test2.pgm"}) {
     const auto path = rangenav::test::data_file_or_skip(name);
-    if (path.empty()) return;
+    if (path.empty()) continue;
     const auto image = rangenav::io::read_pgm(path);
     const auto cells = rangenav::io::occupied_cells(image, 0.05);
     REQUIRE(cells.size() == (std::string(name).find("test1") != std::string::npos ? 6532u : 8490u));
@@ -187,12 +187,11 @@ TEST_CASE("voronoi graph: real occupancy maps (EVG-THIN test1 / test2)") {
 
     const VoronoiPathGraph pruned(cells);  // Kurt3D width, 5 cm margin: 0.215 m
     REQUIRE(pruned.edge_count() > 0);
-    const std::size_t stride = std::max<std::size_t>(1, pruned.edge_count() / 400);
-    for (std::size_t i = 0; i < pruned.edge_count(); i += stride) {
-      const auto& e = pruned.edges()[i];
+    CHECK(pruned.edge_count() < full.edge_count());
+    // Every edge of the pruned graph keeps the clearance, by brute force over all sites.
+    for (const auto& e : pruned.edges())
       REQUIRE(brute_force_clearance(pruned.sites(), pruned.nodes()[e.from].position,
                                     pruned.nodes()[e.to].position) >= 0.215 - 1e-9);
-    }
   }
 }
 

@@ -4,6 +4,7 @@
 #include <random>
 #include <vector>
 
+#include "rangenav/sim/motor.hpp"
 #include "rangenav/sim/robot.hpp"
 #include "rangenav/sim/worlds.hpp"
 
@@ -181,4 +182,53 @@ TEST_CASE("the built-in worlds' start poses and tours are collision-free", "[sim
       from = to;
     }
   }
+}
+
+TEST_CASE("PT1 motor: step response in closed form", "[sim][motor]") {
+  // A linear no-load characteristic T(u) = 0.005 u (m/s per PWM unit).
+  const auto linear = [](double u) { return 0.005 * u; };
+  const Pt1MotorParams params{.time_constant = 0.2, .gain = 0.9, .load_offset = 0.1};
+  // Step from rest to u = 400: v_ss = 0.9 * 2.0 - 0.1 = 1.7 m/s, v(t) = v_ss (1 - e^{-t/tau}).
+  for (const double dt : {0.001, 0.01, 0.05}) {
+    Pt1Motor motor(linear, params);
+    CHECK(motor.steady_state_speed(400.0) == Approx(1.7));
+    double t = 0;
+    for (int k = 0; k < static_cast<int>(std::lround(1.0 / dt)); ++k) {
+      motor.step(400.0, dt);
+      t += dt;
+      INFO("dt " << dt << ", t " << t);
+      REQUIRE(motor.speed() == Approx(1.7 * (1 - std::exp(-t / 0.2))).margin(1e-12));
+    }
+  }
+  // 63.2 % of the step after one time constant, from any initial speed, in either direction.
+  Pt1Motor motor(linear, params, 1.0);
+  motor.step(-400.0, 0.2);
+  CHECK(motor.speed() == Approx(-1.7 + (1.0 + 1.7) * std::exp(-1.0)));
+  // The floor's offset eats small commands: below it the wheel coasts to a stop, not backwards.
+  CHECK(motor.steady_state_speed(10.0) == 0.0);
+  CHECK(motor.steady_state_speed(-10.0) == 0.0);
+  CHECK(motor.steady_state_speed(0.0) == 0.0);
+  // An extra signed load shifts the steady state (turning friction of one wheel).
+  CHECK(motor.steady_state_speed(400.0, 0.25) == Approx(1.45));
+  motor.reset(0.5);
+  for (int k = 0; k < 500; ++k)
+    motor.step(0.0, 0.01);
+  CHECK(motor.speed() == Approx(0.5 * std::exp(-5.0 / 0.2)).margin(1e-12));
+  // Degenerate steps change nothing; a NaN command counts as 0.
+  motor.reset(0.3);
+  CHECK(motor.step(400.0, 0.0) == 0.3);
+  CHECK(motor.step(400.0, std::nan("")) == 0.3);
+  CHECK(motor.step(std::nan(""), 0.2) == Approx(0.3 * std::exp(-1.0)));
+
+  using Catch::Matchers::Equals;
+  CHECK_THROWS_WITH(Pt1Motor(linear, {.time_constant = 0.0}),
+                    Equals("rangenav: Pt1MotorParams: argument 'time_constant' = 0 must be finite "
+                           "and > 0"));
+  CHECK_THROWS_WITH(
+      Pt1Motor(linear, {.gain = -1.0}),
+      Equals("rangenav: Pt1MotorParams: argument 'gain' = -1 must be finite and >= 0"));
+  CHECK_THROWS_WITH(Pt1Motor(nullptr),
+                    Equals("rangenav: Pt1Motor: argument 'no_load_speed' is empty"));
+  CHECK_THROWS_WITH(Pt1Motor(linear, {}, std::nan("")),
+                    Equals("rangenav: Pt1Motor: argument 'initial_speed' = nan must be finite"));
 }
