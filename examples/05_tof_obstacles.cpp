@@ -161,16 +161,15 @@ int main(int argc, char** argv) {
   const double frame_ms = cpu_ms(pipeline, 20);  // the same result every time
   const LaserScan<double> virtual_scan = detector.virtual_scan();
 
-  // The simulator's truth: mixed pixels are those whose reading is far from the true depth of
-  // the pixel centre; real edges are correct pixels next to a much deeper neighbour.
+  // The simulator's truth, for the jump-edge filter's input (the median may carry a mixed value
+  // into a neighbour): mixed pixels are those whose reading is far from the true depth of the
+  // pixel centre; real edges are correct pixels next to a much deeper neighbour.
   std::size_t mixed = 0, mixed_removed = 0, edges = 0, edges_kept = 0;
   for (std::size_t r = 1; r + 1 < h; ++r)
     for (std::size_t c = 1; c + 1 < w; ++c) {
       const std::size_t i = r * w + c;
-      const double d = raw.depth[i], t = truth[i];
-      if (!DepthImage<double>::is_valid_depth(d) || !std::isfinite(t) ||
-          !DepthImage<double>::is_valid_depth(before_jump.depth[i]))
-        continue;
+      const double d = before_jump.depth[i], t = truth[i];
+      if (!DepthImage<double>::is_valid_depth(d) || !std::isfinite(t)) continue;
       const bool removed = !DepthImage<double>::is_valid_depth(img.depth[i]);
       const double sigma = camera.params().noise_sigma_0 + camera.params().noise_sigma_2 * t * t;
       if (std::abs(d - t) > std::max(0.1, 5 * sigma)) {

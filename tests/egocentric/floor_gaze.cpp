@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
@@ -67,9 +68,10 @@ std::vector<Point3d> sweep(const Scene& scene, const Point3d& t_s, double noise,
 }
 
 std::vector<Point3d> obstacles(const std::vector<Point3d>& pts, std::size_t width,
-                               const Point3d& origin) {
+                               const Point3d& origin,
+                               const FloorClassifierParams<double>& params = {}) {
   std::vector<PointClass> classes;
-  classify_points(std::span<const Point3d>(pts), width, FloorClassifierParams<double>{}, classes);
+  classify_points(std::span<const Point3d>(pts), width, params, classes, &origin);
   std::vector<Point3d> out;
   append_obstacle_points(std::span<const Point3d>(pts), std::span<const PointClass>(classes),
                          origin, out);
@@ -93,7 +95,8 @@ TEST_CASE("neighbourhood classes on a hand-made grid", "[egocentric][floor]") {
       {2, 0, 0.0}, {2, 1, 0.005}, {2, 2, 0.0}, {2, 3, -0.3},  //
   };
   std::vector<PointClass> c;
-  classify_points(std::span<const Point3d>(g), 4, FloorClassifierParams<double>{}, c);
+  const Point3d origin(0.0, 0.0, 0.5);  // the bump is seen under 18 deg: threshold 1.6 cm
+  classify_points(std::span<const Point3d>(g), 4, FloorClassifierParams<double>{}, c, &origin);
   CHECK(c[0] == PointClass::floor);
   CHECK(c[1] == PointClass::obstacle);  // 3 cm above its lowest neighbour
   CHECK(c[5] == PointClass::floor);     // 5 mm: within the step height
@@ -124,17 +127,91 @@ TEST_CASE("neighbourhood classes on a hand-made grid", "[egocentric][floor]") {
       "points.size() = 12");
 }
 
+TEST_CASE("floor thresholds follow from the range noise", "[egocentric][floor]") {
+  // A range error moves a reading along its beam: under 30 deg depression, half of it is height.
+  CHECK(floor_height_noise(0.01, deg_to_rad(30.0)) == Approx(0.005));
+  CHECK(floor_height_noise(0.01, 0.0) == 0.0);
+  CHECK_THROWS_WITH(floor_height_noise(-0.01, 0.5),
+                    "rangenav: floor_height_noise: argument 'range_noise' = -0.01 must be "
+                    "finite and >= 0");
+  const FloorClassifierParams<double> p;  // 1 cm, 40 deg, 5 sigma, at least 1.5 cm
+  const Point3d origin(0.0, 0.0, 0.5);
+  // Seen steeply (45 deg): 5 * 1 cm * sin 45 deg = 3.5 cm.
+  const auto steep = p.thresholds(Point3d(0.5, 0.0, 0.0), &origin);
+  CHECK(steep.first == Approx(0.05 * std::sqrt(0.5)));
+  CHECK(steep.second == steep.first);
+  // Seen at a grazing angle (2 m away): 5 * 1 cm * 0.24 = 1.2 cm < the 1.5 cm floor.
+  const auto far = p.thresholds(Point3d(2.0, 0.0, 0.0), &origin);
+  CHECK(far.first == 0.015);
+  CHECK(far.second == 0.015);
+  // Origin unknown: the steepest beam (40 deg).
+  CHECK(p.thresholds(Point3d(2.0, 0.0, 0.0), nullptr).first ==
+        Approx(0.05 * std::sin(deg_to_rad(40.0))));
+  FloorClassifierParams<double> bad;
+  bad.range_noise = -1;
+  std::vector<PointClass> c;
+  const std::vector<Point3d> g(4, Point3d(1, 0, 0));
+  CHECK_THROWS_WITH(classify_points(std::span<const Point3d>(g), 2, bad, c),
+                    "rangenav: classify_points: argument 'range_noise' = -1 must be finite and "
+                    ">= 0");
+}
+
 TEST_CASE("a flat noisy floor never enters the obstacle map", "[egocentric][floor]") {
   const Scene flat{100.0, {0, 0, 0}, {0, 0, 0}};
   const Point3d t_s(0.1, 0.0, 0.4);
   std::size_t width = 0;
-  ObstacleMap<double> map;
-  for (unsigned seed = 1; seed <= 5; ++seed) {
-    const auto pts = sweep(flat, t_s, 0.005, width, seed);  // 5 mm range noise (SICK LMS 2xx)
-    REQUIRE(pts.size() > 10000);
-    map.insert(obstacles(pts, width, t_s));
+  // The default parameters with the simulator's default noise (1 cm), and the SICK LMS 2xx's
+  // 5 mm with the parameters derived from it.
+  for (const double noise : {0.01, 0.005}) {
+    INFO("range noise " << noise);
+    FloorClassifierParams<double> params;
+    params.range_noise = noise;
+    ObstacleMap<double> map;
+    std::size_t points = 0;
+    for (unsigned seed = 1; seed <= 5; ++seed) {
+      const auto pts = sweep(flat, t_s, noise, width, seed);
+      REQUIRE(pts.size() > 10000);
+      points += pts.size();
+      map.insert(obstacles(pts, width, t_s, params));
+    }
+    CHECK(points > 50000);
+    CHECK(map.valid_count() == 0);
   }
-  CHECK(map.valid_count() == 0);
+  // Thresholds that ignore the noise (1.5 cm) let 1-cm noise through.
+  FloorClassifierParams<double> old;
+  old.range_noise = 0.0;
+  ObstacleMap<double> map;
+  for (unsigned seed = 1; seed <= 5; ++seed)
+    map.insert(obstacles(sweep(flat, t_s, 0.01, width, seed), width, t_s, old));
+  CHECK(map.valid_count() > 0);
+}
+
+TEST_CASE("a 3-cm object survives the default classification with the default noise",
+          "[egocentric][floor]") {
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    INFO("seed " << seed);
+    Scene scene;
+    scene.box_max.z() = 0.03;
+    const Point3d t_s(0.0, 0.0, 0.4);
+    std::size_t width = 0;
+    const auto pts = sweep(scene, t_s, 0.01, width, seed);
+    ObstacleMap<double> map;
+    map.insert(obstacles(pts, width, t_s));
+    // The 1-deg beams leave some 0.5-deg bins empty: the nearest reading within one bin.
+    for (const double bearing : {-0.03, 0.0, 0.03}) {
+      INFO("bearing " << bearing);
+      double nearest_x = std::numeric_limits<double>::infinity();
+      const std::size_t k = map.bin_index(bearing);
+      for (std::size_t j = k - 1; j <= k + 1; ++j)
+        if (!map.bin(j).dummy) nearest_x = std::min(nearest_x, map.bin(j).x);
+      CHECK(nearest_x == Approx(1.5).margin(0.05));  // the front face at x = 1.5
+    }
+    for (const auto& p : map.valid_points()) {  // and nothing but the box
+      CHECK(p.x() >= 1.45);
+      CHECK(p.x() <= 1.75);
+      CHECK(std::abs(p.y()) <= 0.15);
+    }
+  }
 }
 
 TEST_CASE("a 2-cm object survives the neighbourhood classification, not the threshold",
@@ -143,7 +220,7 @@ TEST_CASE("a 2-cm object survives the neighbourhood classification, not the thre
   scene.box_max.z() = 0.02;
   const Point3d t_s(0.0, 0.0, 0.4);
   std::size_t width = 0;
-  const auto pts = sweep(scene, t_s, 0.005, width);
+  const auto pts = sweep(scene, t_s, 0.005, width);  // 5 mm: the SICK LMS 2xx
   ObstacleMap<double> map;
   map.insert(obstacles(pts, width, t_s));
   // Straight ahead the nearest obstacle is the box's front face at x = 1.5.

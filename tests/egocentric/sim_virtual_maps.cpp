@@ -172,6 +172,46 @@ TEST_CASE("a person walking past leaves a trace that ages out", "[egocentric][si
   CHECK(trace() == 0);
 }
 
+TEST_CASE("with the simulator's default noise, floor stays out and a 3-cm object gets in",
+          "[egocentric][sim]") {
+  // A 3 m wide corridor with a 3-cm box (0.2 x 0.3 m) on the floor 3 m ahead; the robot drives
+  // towards it at 0.3 m/s with the simulator's default pitching scanner (1 cm range noise) and
+  // the default floor classification (thresholds derived from that noise, floor.hpp).
+  sim::World world;
+  world.add_wall({-2, -1.5}, {20, -1.5});
+  world.add_wall({-2, 1.5}, {20, 1.5});
+  const sim::Box box{{3.1, 0.0}, {0.2, 0.3}, 0.0, 0.0, 0.03};
+  world.add_box(box);
+  world.build_index();
+  const sim::PitchingScanner scanner;  // defaults
+  REQUIRE(scanner.params().noise.sigma == 0.01);
+  PitchingObstacleExtractor<double> extractor(scanner.params().sensor_offset);
+  ObstacleMap<double> map;
+  std::mt19937 rng(17);
+  const double dt = 0.01332, v = 0.3;
+  Pose2d pose{0, 0, 0}, previous = pose;
+  std::size_t floor_points = 0;
+  for (std::size_t k = 0; k < 300; ++k) {  // 4 m -> 1.2 m from the box, three nods
+    const auto ps = scanner.scan(world, pose, scanner.scan_time(k), rng);
+    map.update(relative(previous, pose), extractor.push(ps, pose));
+    for (const auto& p : map.valid_points()) {
+      const Point2d w = pose.transform_point(p);
+      const bool on_wall = std::abs(std::abs(w.y()) - 1.5) < 0.05;
+      const bool on_box = std::abs(w.x() - 3.1) < 0.15 && std::abs(w.y()) < 0.2;
+      floor_points += on_wall || on_box ? 0 : 1;
+    }
+    previous = pose;
+    pose = sim::DifferentialDriveRobot::integrate(pose, v, 0.0, dt);
+  }
+  CHECK(floor_points == 0);
+  // The box's front face (x = 3.0) straight ahead, within 5 cm.
+  for (const double bearing : {-0.04, 0.0, 0.04}) {
+    INFO("bearing " << bearing);
+    const double truth = (3.0 - pose.x) / std::cos(bearing);
+    CHECK(map_range(map, bearing) == Approx(truth).margin(0.05));
+  }
+}
+
 TEST_CASE("§6.1 reduction: lines on the true walls, planes of the walls and the floor",
           "[egocentric][sim][reduction]") {
   // A five-walled room (one wall oblique); the robot drives at 0.2 m/s while the scanner nods.
@@ -200,7 +240,9 @@ TEST_CASE("§6.1 reduction: lines on the true walls, planes of the walls and the
   std::mt19937 rng(21);
   const sim::PitchingScanner scanner(scanner_params());
   SweepAssembler<double> sweeps(SweepParams<double>{scanner.params().sensor_offset});
-  SweepReducer<double> reducer;
+  SweepReductionParams<double> rp;
+  rp.floor.range_noise = scanner.params().noise.sigma;
+  SweepReducer<double> reducer(rp);
   SweepReduction<double> red;
   Pose2d pose{1.5, 2.0, 0.4};
   std::size_t reduced = 0;

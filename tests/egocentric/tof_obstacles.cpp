@@ -8,6 +8,8 @@
 #include "rangenav/egocentric/virtual_map.hpp"
 #include "rangenav/scan/pitching.hpp"
 #include "rangenav/scan/tof_filters.hpp"
+#include "rangenav/sim/sensors.hpp"
+#include "rangenav/sim/world.hpp"
 
 using namespace rangenav;
 
@@ -114,6 +116,78 @@ TEST_CASE("ToF: tables above the corridor are ignored, stairs become obstacles",
   CHECK(scan.range(88) == Approx(1.6).margin(0.05));
   for (const auto& p : detector.obstacle_points())
     CHECK(p.z() == 0.0);
+}
+
+TEST_CASE("jump-edge filtering removes the simulator's mixed pixels and keeps real edges",
+          "[egocentric][tof]") {
+  // The simulated SR4000 (sim::TofCamera, default noise) 1.1 m high, tilted 25 deg down, at a
+  // 0.5 m box 1.6 m ahead in front of a wall 3.5 m away: mixed pixels along the box's top and
+  // sides (the camera reports the power-weighted mean depth of both surfaces, paper 002 §7.1).
+  sim::World world;
+  world.add_wall({{3.5, -3.0}, {3.5, 3.0}});
+  world.add_box({{1.8, 0.0}, {0.4, 0.6}, 0.0, 0.0, 0.5});
+  world.build_index();
+  sim::TofCamera camera;
+  camera.set_pan_tilt(0.0, deg_to_rad(25.0));
+  std::mt19937 rng(5);
+  const Pose2d robot{};
+  const DepthImage<double> raw = camera.capture(world, robot, rng);
+  const std::vector<double> truth = camera.true_depth(world, robot);
+  DepthImage<double> before = raw;
+  apply_median_filter(before);  // the pipeline of §7.1: median, then Eq. (13)-(14)
+  DepthImage<double> after = before;
+  JumpEdgeFilter<double> filter(raw.intrinsics, raw.kind);
+  CHECK(filter.filter(after) > 0);
+  // Truth, for the filter's input (the median may carry a mixed value into a neighbour): a mixed
+  // pixel reads far (> max(10 cm, 5 sigma)) from the true depth of its centre; a real edge pixel
+  // reads its true depth and has a neighbour at least 0.3 m deeper.
+  const std::size_t w = raw.width(), h = raw.height();
+  std::size_t mixed = 0, mixed_removed = 0, edges = 0, edges_kept = 0;
+  for (std::size_t r = 1; r + 1 < h; ++r)
+    for (std::size_t c = 1; c + 1 < w; ++c) {
+      const std::size_t i = r * w + c;
+      const double d = before.depth[i], t = truth[i];
+      if (!DepthImage<double>::is_valid_depth(d) || !std::isfinite(t)) continue;
+      const bool removed = !DepthImage<double>::is_valid_depth(after.depth[i]);
+      const double sigma = camera.params().noise_sigma_0 + camera.params().noise_sigma_2 * t * t;
+      if (std::abs(d - t) > std::max(0.1, 5 * sigma)) {
+        ++mixed;
+        mixed_removed += removed ? 1 : 0;
+        continue;
+      }
+      bool edge = false;
+      for (const std::size_t j : {i - 1, i + 1, i - w, i + w})
+        edge = edge || !(truth[j] < t + 0.3);
+      if (edge) {
+        ++edges;
+        edges_kept += removed ? 0 : 1;
+      }
+    }
+  INFO("mixed " << mixed_removed << " / " << mixed << " removed, edges " << edges_kept << " / "
+                << edges << " kept");
+  REQUIRE(mixed > 50);
+  REQUIRE(edges > 50);
+  CHECK(mixed_removed == mixed);
+  CHECK(static_cast<double>(edges_kept) >= 0.9 * static_cast<double>(edges));
+  // Eq. (14) alone (min_jump = 0) removes more of the real edges.
+  JumpEdgeParams<double> angle_only;
+  angle_only.min_jump = 0.0;
+  DepthImage<double> strict = before;
+  JumpEdgeFilter<double>(raw.intrinsics, raw.kind, angle_only).filter(strict);
+  std::size_t strict_removed = 0, removed = 0;
+  for (std::size_t i = 0; i < raw.depth.size(); ++i) {
+    strict_removed += DepthImage<double>::is_valid_depth(strict.depth[i]) ? 0 : 1;
+    removed += DepthImage<double>::is_valid_depth(after.depth[i]) ? 0 : 1;
+  }
+  CHECK(strict_removed > removed);
+  // Without the filter the mixed pixels would be there.
+  std::size_t left = 0;
+  for (std::size_t i = 0; i < raw.depth.size(); ++i)
+    left += DepthImage<double>::is_valid_depth(before.depth[i]) && std::isfinite(truth[i]) &&
+                    std::abs(before.depth[i] - truth[i]) > 0.1
+                ? 1
+                : 0;
+  CHECK(left > 50);
 }
 
 TEST_CASE("fusion: laser scan and ToF virtual scan in one obstacle map", "[egocentric][tof]") {

@@ -365,6 +365,64 @@ TEST_CASE("2D scans insert through a planar mount", "[egocentric][virtual_map]")
   CHECK(high.insert(scan, PlanarMount<double>{Pose2d{}, 1.5}) == 0);
 }
 
+TEST_CASE("beams on bin borders fill every bin exactly once (half-open bins, wrap at pi)",
+          "[egocentric][virtual_map]") {
+  // A full turn of 720 beams starting at -pi with increment 2 pi / 720: every beam lies on the
+  // lower border of one bin of the 720-bin map, so beam k belongs to bin k.
+  const double inc = 2 * pi / 720;
+  std::vector<double> ranges(720);
+  for (std::size_t k = 0; k < ranges.size(); ++k)
+    ranges[k] = 1.0 + 0.001 * static_cast<double>(k);  // tells the beams apart
+  const LaserScand scan(-pi, inc, 0.05, 30.0, ranges);
+  const auto every_bin_once = [&](const auto& map, std::size_t shift) {
+    REQUIRE(map.valid_count() == 720);
+    for (std::size_t k = 0; k < 720; ++k)
+      REQUIRE(map.bin((k + 720 - shift) % 720).range == Approx(ranges[k]).margin(1e-9));
+  };
+  ObstacleMap<double> obstacle;
+  CHECK(obstacle.insert(scan, PlanarMount<double>{Pose2d{}, 0.3}) == 720);
+  every_bin_once(obstacle, 0);
+  StructureMap<double> structure;
+  CHECK(structure.insert(scan) == 720);
+  every_bin_once(structure, 0);
+  // The same bearings as 3D points (bearings from the coordinates, not from the scan).
+  std::vector<Point3d> points;
+  for (std::size_t k = 0; k < 720; ++k) {
+    const double a = -pi + inc * static_cast<double>(k);
+    points.emplace_back(ranges[k] * std::cos(a), ranges[k] * std::sin(a), 0.3);
+  }
+  ObstacleMap<double> from_points;
+  CHECK(from_points.insert(points) == 720);
+  every_bin_once(from_points, 0);
+  // Turning on the spot by whole bins moves every point by whole bins: none lost, none doubled.
+  for (int turn = 1; turn <= 25; ++turn) {
+    const auto st = obstacle.transform(Pose2d{0.0, 0.0, 3 * inc});
+    REQUIRE(st.moved == 720);
+    REQUIRE(st.merged == 0);
+  }
+  every_bin_once(obstacle, 75);
+  // Turning back by a multiple of the bin width, across the wrap at pi, as well.
+  obstacle.transform(Pose2d{0.0, 0.0, -75 * inc});
+  every_bin_once(obstacle, 0);
+  // A scan starting at 0 crosses pi in the middle.
+  const LaserScand from_zero(0.0, inc, 0.05, 30.0, ranges);
+  ObstacleMap<double> wrapped;
+  CHECK(wrapped.insert(from_zero) == 720);
+  every_bin_once(wrapped, 360);
+  // Single precision: the same scan in float.
+  std::vector<float> ranges_f(ranges.begin(), ranges.end());
+  const LaserScanf scan_f(-std::numbers::pi_v<float>, 2 * std::numbers::pi_v<float> / 720, 0.05f,
+                          30.0f, ranges_f);
+  ObstacleMap<float> obstacle_f;
+  CHECK(obstacle_f.insert(scan_f, PlanarMount<float>{Pose2f{}, 0.3f}) == 720);
+  // A restricted aperture: 90 deg at 1 deg, beams on the borders from -45 deg; the beam at
+  // +45 deg is the upper end of the aperture and stays outside (half-open).
+  StructureMap<double> quarter(VirtualMapParams<double>{pi / 2, pi / 180});
+  const LaserScand border_scan(-pi / 4, pi / 180, 0.05, 30.0, std::vector<double>(91, 2.0));
+  CHECK(quarter.insert(border_scan) == 90);
+  CHECK(quarter.valid_count() == 90);
+}
+
 TEST_CASE("float maps behave like double maps", "[egocentric][virtual_map]") {
   ObstacleMap<float> map;
   map.insert(std::vector<Point3f>{Point3f(2.0f, 0.5f, 0.3f)});

@@ -92,6 +92,10 @@ TEST_CASE("jump-edge filter (Eq. 13-14) removes mixed pixels and keeps real edge
   CHECK_THROWS_WITH(
       JumpEdgeFilter<double>(img.intrinsics, DepthKind::radial, bad),
       "rangenav: JumpEdgeFilter: argument 'epsilon_theta' = 1 must lie in (pi/2, pi)");
+  JumpEdgeParams<double> negative;
+  negative.min_jump = -0.5;
+  CHECK_THROWS_WITH(JumpEdgeFilter<double>(img.intrinsics, DepthKind::radial, negative),
+                    "rangenav: JumpEdgeFilter: argument 'min_jump' = -0.5 must be finite and >= 0");
   auto small = planes(4, 3, [](std::size_t) { return 1.0; });
   CHECK_THROWS_WITH(filter.filter(small),
                     "rangenav: JumpEdgeFilter::filter: argument 'image.width()' = 4 and height "

@@ -24,9 +24,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rangenav/core/cloud.hpp"
@@ -52,16 +54,51 @@ template <std::floating_point Scalar>
   return z >= -epsilon_z && z <= epsilon_z;
 }
 
+/// The height noise (1 sigma, m) of floor readings of a range sensor with range noise
+/// `range_noise` (1 sigma, m) whose steepest beam onto the floor points `steepest_depression`
+/// (rad) below the horizontal: a range error moves a reading along its beam, so a floor reading
+/// seen under the depression δ scatters in height with σ_r sin δ (the "tolerance according to the
+/// sensor's accuracy" of §4.2). For a pitching scanner δ_max is its largest pitch (Eq. 3).
+template <std::floating_point Scalar>
+[[nodiscard]] Scalar floor_height_noise(Scalar range_noise, Scalar steepest_depression) {
+  detail::require_non_negative("floor_height_noise", "range_noise", range_noise);
+  detail::require_finite("floor_height_noise", "steepest_depression", steepest_depression);
+  return range_noise * std::abs(std::sin(steepest_depression));
+}
+
 /// Parameters of the neighbourhood-based classification. Heights are above the floor (m).
+///
+/// A floor reading is only called an obstacle when it lies noise_factor σ_z above the floor plane
+/// and above the lowest point of its neighbourhood, σ_z = floor_height_noise(range_noise, δ) for
+/// the depression δ under which the sensor sees it (when the classification knows the sensor's
+/// origin), else for steepest_depression. Thresholds fixed in metres fail with noise: the lowest
+/// point of W is the minimum of some 10-40 noisy floor readings, about 2.5 σ_z below the floor,
+/// so the neighbourhood test alone passes a floor reading only 1 σ_z high, and 1.5 cm above the
+/// plane is only 2.3 σ_z for the steepest beams of a pitching scanner with 1 cm range noise.
+/// With noise_factor = 5 a floor reading passes with a probability below 3e-7 (one-sided 5 σ).
+/// The defaults are the simulator's pitching scanner (σ_r = 1 cm, pitch up to 40 deg, axis 0.55 m
+/// high): 3.2 cm where the beams are steepest, near the robot, falling to the 1.5 cm floor of
+/// min_height / step_height from about 1.75 m on; a 3-cm object 1.5 m ahead keeps its front face
+/// above 1.7 cm (§4.2: small objects must survive), and the map keeps it as the robot comes
+/// closer. Without the sensor's origin every point gets the steepest beam's 3.2 cm.
 template <std::floating_point Scalar = double>
 struct FloorClassifierParams {
   /// |z| <= floor_band may be floor; whether it is, the neighbourhood decides.
   Scalar floor_band{Scalar(0.05)};
-  /// ε_H: a point more than this above the lowest point of its neighbourhood is not floor
-  /// (at least the sensor's height noise, as for Eq. (15)).
+  /// ε_H: a point more than max(step_height, noise_factor σ_z) above the lowest point of its
+  /// neighbourhood is not floor.
   Scalar step_height{Scalar(0.015)};
-  /// ... and it must lie this much above the floor plane z = 0 (against isolated noise).
+  /// ... and it must lie max(min_height, noise_factor σ_z) above the floor plane z = 0
+  /// (against isolated noise and the floor's own unevenness).
   Scalar min_height{Scalar(0.015)};
+  /// σ_r (m, 1 sigma): the sensor's range noise; 1 cm is the simulator's default, 5 mm a SICK
+  /// LMS 2xx's. 0: the fixed thresholds alone.
+  Scalar range_noise{Scalar(0.01)};
+  /// δ_max (rad): the steepest depression of a beam onto the floor, used when the sensor's
+  /// origin is not known (a pitching scanner's largest pitch; 40 deg in the simulator).
+  Scalar steepest_depression{std::numbers::pi_v<Scalar> * 2 / 9};
+  /// How many σ_z a floor reading must rise to count as an obstacle.
+  Scalar noise_factor{Scalar(5)};
   /// m: the neighbourhood extends along the column while points stay this close horizontally.
   Scalar window_radius{Scalar(0.1)};
   /// The most points visited in each direction of the column.
@@ -73,10 +110,25 @@ struct FloorClassifierParams {
   /// Horizontal points (neighbourhood height range <= step_height) at or above this height.
   Scalar ceiling_height{Scalar(1.9)};
 
+  /// The heights a point seen from `sensor_origin` (nullptr: unknown) must rise above the floor
+  /// plane and above the lowest point of its neighbourhood to be an obstacle.
+  [[nodiscard]] std::pair<Scalar, Scalar> thresholds(const Point<3, Scalar>& p,
+                                                     const Point<3, Scalar>* sensor_origin) const {
+    // floor_height_noise(range_noise, δ) with sin δ from the beam when the origin is known.
+    const Scalar d = sensor_origin != nullptr ? (p - *sensor_origin).norm() : Scalar(0);
+    const Scalar sin_depression =
+        d > Scalar(0) ? (sensor_origin->z() - p.z()) / d : std::sin(steepest_depression);
+    const Scalar noise = noise_factor * range_noise * std::abs(sin_depression);
+    return {std::max(min_height, noise), std::max(step_height, noise)};
+  }
+
   void validate(std::string_view where = "FloorClassifierParams") const {
     detail::require_non_negative(where, "floor_band", floor_band);
     detail::require_positive(where, "step_height", step_height);
     detail::require_non_negative(where, "min_height", min_height);
+    detail::require_non_negative(where, "range_noise", range_noise);
+    detail::require_finite(where, "steepest_depression", steepest_depression);
+    detail::require_non_negative(where, "noise_factor", noise_factor);
     detail::require_non_negative(where, "window_radius", window_radius);
     detail::require_non_negative(where, "below_floor", below_floor);
     detail::require_finite(where, "wall_height", wall_height);
@@ -127,7 +179,8 @@ void window_height_range(std::span<const Point<3, Scalar>> points, std::size_t w
 template <std::floating_point Scalar>
 [[nodiscard]] PointClass classify_point(std::span<const Point<3, Scalar>> points, std::size_t width,
                                         std::size_t height, std::size_t r, std::size_t c,
-                                        const FloorClassifierParams<Scalar>& params) {
+                                        const FloorClassifierParams<Scalar>& params,
+                                        const Point<3, Scalar>* sensor_origin = nullptr) {
   const Point<3, Scalar>& p = points[r * width + c];
   if (!p.allFinite()) return PointClass::invalid;
   const Scalar z = p.z();
@@ -137,8 +190,10 @@ template <std::floating_point Scalar>
   Scalar lo, hi;
   detail::window_height_range(points, width, height, r, c, params.window_radius,
                               params.window_steps, params.below_floor, lo, hi);
-  if (std::abs(z) <= params.floor_band && (z - lo <= params.step_height || z <= params.min_height))
-    return PointClass::floor;
+  if (std::abs(z) <= params.floor_band) {
+    const auto [min_height, step_height] = params.thresholds(p, sensor_origin);
+    if (z - lo <= step_height || z <= min_height) return PointClass::floor;
+  }
   if (z >= params.ceiling_height && hi - lo <= params.step_height) return PointClass::ceiling;
   if (z >= params.wall_height) return PointClass::wall;
   return PointClass::obstacle;
@@ -147,10 +202,11 @@ template <std::floating_point Scalar>
 /// Classifies the points of an organised grid (row-major, `width` columns; rows = consecutive
 /// scans of a sweep or image rows, columns = beams or pixels; non-finite points are invalid) into
 /// `classes` (resized to the point count). Heights z are above the floor in the robot frame.
+/// `sensor_origin` (same frame, nullptr: unknown) gives each point its own noise threshold.
 template <std::floating_point Scalar>
 void classify_points(std::span<const Point<3, Scalar>> points, std::size_t width,
-                     const FloorClassifierParams<Scalar>& params,
-                     std::vector<PointClass>& classes) {
+                     const FloorClassifierParams<Scalar>& params, std::vector<PointClass>& classes,
+                     const Point<3, Scalar>* sensor_origin = nullptr) {
   if (width == 0 || points.size() % width != 0)
     detail::throw_invalid_argument(
         "classify_points", "width", width,
@@ -160,7 +216,7 @@ void classify_points(std::span<const Point<3, Scalar>> points, std::size_t width
   classes.resize(points.size());
   for (std::size_t r = 0; r < height; ++r)
     for (std::size_t c = 0; c < width; ++c)
-      classes[r * width + c] = classify_point(points, width, height, r, c, params);
+      classes[r * width + c] = classify_point(points, width, height, r, c, params, sensor_origin);
 }
 
 /// The same for an organised Cloud (width x height).

@@ -220,7 +220,7 @@ class PitchingObstacleExtractor {
     const std::span<const Point<3, Scalar>> grid(buffer_.data(), rows_ * w);
     for (std::size_t col = 0; col < w; ++col) {
       const Point<3, Scalar>& p = grid[m * w + col];
-      switch (classify_point(grid, w, rows_, m, col, floor_)) {
+      switch (classify_point(grid, w, rows_, m, col, floor_, &origins_[m])) {
         case PointClass::obstacle:
         case PointClass::wall:
         case PointClass::ceiling:

@@ -272,10 +272,11 @@ class VirtualMap {
     bin_count_ = std::max<std::size_t>(n, 1);
     resolution_ = params_.aperture / static_cast<Scalar>(bin_count_);
     inv_resolution_ = Scalar(1) / resolution_;
+    bin_count_f_ = static_cast<Scalar>(bin_count_);
     angle_min_ = -params_.aperture / 2;
     full_circle_ = std::abs(params_.aperture - 2 * std::numbers::pi_v<Scalar>) < resolution_ / 2;
-    bins_.resize(bin_count_);
-    scratch_.resize(bin_count_);
+    bins_.resize(bin_count_ + 1);  // + the sink bin of branch-free selection (select_bin)
+    scratch_.resize(bin_count_ + 1);
     valid_points_.reserve(bin_count_);
     valid_indices_.reserve(bin_count_);
     clear();
@@ -295,7 +296,7 @@ class VirtualMap {
   /// Changes the age threshold of §4.4.2 (takes effect at the next transformation).
   void set_max_age(std::uint32_t max_age) { params_.max_age = max_age; }
 
-  [[nodiscard]] std::span<const bin_type> bins() const { return bins_; }
+  [[nodiscard]] std::span<const bin_type> bins() const { return {bins_.data(), bin_count_}; }
   [[nodiscard]] const bin_type& bin(std::size_t i) const { return bins_[i]; }
   /// Bearing of the centre of bin i.
   [[nodiscard]] Scalar bin_bearing(std::size_t i) const {
@@ -321,6 +322,7 @@ class VirtualMap {
       bins_[i] = bin_type{d * std::cos(b), d * std::sin(b), Scalar(0), d, b, 0, true};
     }
     dummies_ = bins_;
+    scratch_ = bins_;
     refresh();
   }
 
@@ -391,9 +393,12 @@ class VirtualMap {
     const Scalar max_range = params_.max_range;
     const std::uint32_t max_age = params_.max_age;
     const Scalar blind_range = params_.blind_range;
-    std::copy(dummies_.begin(), dummies_.end(), scratch_.begin());
+    // scratch_ holds only dummies here; each bin read is reset to its dummy on the way, so the
+    // buffers swap roles without a refill of all N bins.
+    std::size_t moved = 0, merged = 0;
     for (const std::uint32_t i : valid_indices_) {
-      const bin_type& b = bins_[i];
+      const bin_type b = bins_[i];
+      bins_[i] = dummies_[i];
       // Would exceed max_age with this transformation (step 2), unless the sensor cannot see it.
       if (b.age >= max_age && !(b.range < blind_range)) {
         ++stats.aged_out;
@@ -403,28 +408,31 @@ class VirtualMap {
       const Scalar qx = c * b.x - s * b.y, qy = s * b.x + c * b.y;
       const Scalar x = qx + tx, y = qy + ty;
       const Scalar range = std::sqrt(x * x + y * y);
-      const Scalar bearing =
-          detail::shifted_bearing(qx, qy, b.range, normalize_rotated(b.bearing + dtheta), tx, ty);
+      // b.bearing + dtheta lies in (-2 pi, 2 pi]; shifted_bearing's single wrap normalises it.
+      const Scalar bearing = detail::shifted_bearing(qx, qy, b.range, b.bearing + dtheta, tx, ty);
       const std::size_t k = index_of((bearing - angle_min_) * inv_resolution_);
       if (k == bin_count_ || !policy.admits(range, b.z, max_range)) {
         ++stats.merged;
         continue;
       }
-      bin_type& dst = scratch_[k];
-      if (!dst.dummy) {
-        ++stats.merged;
-        if (!policy.prefers(range, dst.range)) continue;
-      } else {
-        ++stats.moved;
-      }
-      dst.x = x;
-      dst.y = y;
-      dst.z = b.z;
-      dst.range = range;
-      dst.bearing = bearing;
-      dst.age = b.age < max_age ? b.age + 1 : max_age;  // no overflow in the blind zone
-      dst.dummy = false;
+      // Which point a bin keeps depends on the data (about half the collisions go either way):
+      // select the destination instead of branching, a rejected point goes to the sink.
+      const bin_type& dst = scratch_[k];
+      const bool empty = dst.dummy;
+      const bool take = empty | static_cast<bool>(policy.prefers(range, dst.range));
+      moved += static_cast<std::size_t>(empty);
+      merged += static_cast<std::size_t>(!empty);
+      scratch_[select_bin(take, k)] =
+          bin_type{x,
+                   y,
+                   b.z,
+                   range,
+                   bearing,
+                   b.age < max_age ? b.age + 1 : max_age,  // no overflow in the blind zone
+                   false};
     }
+    stats.moved = moved;
+    stats.merged += merged;
     std::swap(bins_, scratch_);
     return stats;
   }
@@ -466,11 +474,30 @@ class VirtualMap {
     return a;
   }
 
+  /// The bin of f = (bearing - angle_min) / (Θ / N), or size() outside the aperture. Bins are
+  /// half-open, [k, k + 1) in f, and a full circle wraps at ±pi (f = N is bin 0). A bearing on a
+  /// bin border (a scan whose beams start at -pi with increment Δθ, a rotation by a multiple of
+  /// Δθ) arrives here as k ± a few ulps; the border tolerance (in bins, far below any sensor's
+  /// angular noise) sends it to bin k every time, so such a scan fills each bin exactly once.
   std::size_t index_of(Scalar f) const {
-    if (!(f >= Scalar(0))) return full_circle_ && f > Scalar(-1) ? 0 : bin_count_;
-    auto k = static_cast<std::size_t>(f);
-    if (k >= bin_count_) k = full_circle_ ? k - bin_count_ : bin_count_;
-    return k < bin_count_ ? k : bin_count_;
+    f += border_tolerance_;
+    if (!(f >= Scalar(0))) {  // below the aperture, or NaN
+      if (!full_circle_ || !(f > -bin_count_f_)) return bin_count_;
+      f += bin_count_f_;
+    } else if (f >= bin_count_f_) {
+      if (!full_circle_ || !(f < 2 * bin_count_f_)) return bin_count_;
+      f -= bin_count_f_;
+    }
+    const auto k = static_cast<std::size_t>(f);
+    return k < bin_count_ ? k : (full_circle_ ? 0 : bin_count_);  // f + N rounded up to N
+  }
+
+  /// k when `take`, else the sink bin, without a branch: which of two readings a policy keeps is
+  /// data-dependent (a re-observation is nearer about half the time), so a branch on it is
+  /// mispredicted about every other reading.
+  std::size_t select_bin(bool take, std::size_t k) const {
+    const std::size_t mask = std::size_t(0) - static_cast<std::size_t>(take);
+    return bin_count_ ^ ((k ^ bin_count_) & mask);
   }
 
   std::size_t insert_one(Scalar x, Scalar y, Scalar z) {
@@ -484,12 +511,14 @@ class VirtualMap {
     const std::size_t k = index_of((bearing - angle_min_) * inv_resolution_);
     if (k == bin_count_) return 0;
     bin_type& dst = bins_[k];
-    if (!dst.dummy && !policy.prefers(r, dst.range)) {
-      if (detail::policy_refreshes(policy, r, dst.range)) dst.age = 0;  // seen again
-      return 0;
-    }
-    dst = bin_type{x, y, z, r, bearing, 0, false};
-    return 1;
+    // Whether the new reading wins is data-dependent (a re-observation is nearer about half the
+    // time): select the destination instead of branching, a losing reading goes to the sink.
+    const bool take = dst.dummy | static_cast<bool>(policy.prefers(r, dst.range));
+    const bool seen_again = static_cast<bool>(detail::policy_refreshes(policy, r, dst.range));
+    bins_[select_bin(take, k)] = bin_type{x, y, z, r, bearing, 0, false};
+    // A re-observation restarts the age (§4.4.2); the mask keeps this free of branches too.
+    dst.age &= std::uint32_t(0) - static_cast<std::uint32_t>(!(take | seen_again));
+    return static_cast<std::size_t>(take);
   }
 
   void refresh() {  // within the reserved capacity: no allocation
@@ -508,8 +537,14 @@ class VirtualMap {
 
   VirtualMapParams<Scalar> params_;
   std::size_t bin_count_{0};
-  Scalar resolution_{0}, inv_resolution_{0}, angle_min_{0};
+  Scalar resolution_{0}, inv_resolution_{0}, angle_min_{0}, bin_count_f_{0};
+  /// In bins: sqrt(machine epsilon), 1.5e-8 bins (1.3e-10 rad at 0.5 deg) in double, 3.5e-4 in
+  /// float; bearings computed on a border are off by far less, real readings never matter at
+  /// this scale.
+  static constexpr Scalar border_tolerance_ =
+      std::same_as<Scalar, float> ? Scalar(3.5e-4) : Scalar(1.5e-8);
   bool full_circle_{false};
+  // bin_count_ + 1 entries each: the last one, the sink, receives the writes a policy rejects.
   std::vector<bin_type> bins_, scratch_, dummies_;
   std::vector<point_type> valid_points_;
   std::vector<std::uint32_t> valid_indices_;

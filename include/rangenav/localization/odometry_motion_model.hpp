@@ -52,8 +52,11 @@ class OdometryMotionModel {
   [[nodiscard]] Pose2d sample(const Pose2d& x, const OdometryReading& u, Engine& rng) const {
     const double dx = u.current.x - u.previous.x, dy = u.current.y - u.previous.y;
     const double trans = std::hypot(dx, dy);
-    // Below a millimetre the heading of the translation is noise: count it all as rotation.
-    const double rot1 = trans < 1e-3 ? 0.0 : normalize_angle(std::atan2(dy, dx) - u.previous.theta);
+    // Below 1 cm (AMCL's threshold) the direction of the translation is noise: count the
+    // increment as a pure rotation. Otherwise a 2 mm creep at an odd angle reads as rot1 = -rot2
+    // of up to pi/2, whose alpha1 noise turned the particles' headings by up to 0.45 rad in one
+    // step on FR079 (scan 3723, robot stopping) and the filter lost the robot.
+    const double rot1 = trans < 1e-2 ? 0.0 : normalize_angle(std::atan2(dy, dx) - u.previous.theta);
     const double rot2 = normalize_angle(u.current.theta - u.previous.theta - rot1);
     const auto folded = [](double a) {
       return std::min(std::abs(a), std::numbers::pi - std::abs(a));
