@@ -113,14 +113,15 @@ class ConcaveHull {
     }
     select_sites();
     auto result = build(grid);
-    for (std::size_t i = 0; i < n; ++i)  // thinned points belong to their cell's site
-      if (representative_[i] != i) site_of_point_[i] = site_of_point_[representative_[i]];
-    if (piece_of_point) {
-      piece_of_point->assign(n, -1);
-      for (std::size_t i = 0; i < n; ++i) {
-        const std::uint32_t root = find(site_of_point_[i]);
-        (*piece_of_point)[i] = root < piece_of_root_.size() ? piece_of_root_[root] : -1;
+    if (piece_of_point) {  // per site, then per point through its site (a thinned point: its
+      piece_of_site_.resize(sites_.size());  // representative's)
+      for (std::size_t s = 0; s < sites_.size(); ++s) {
+        const std::uint32_t root = find(static_cast<std::uint32_t>(s));
+        piece_of_site_[s] = root < piece_of_root_.size() ? piece_of_root_[root] : -1;
       }
+      piece_of_point->resize(n);
+      for (std::size_t i = 0; i < n; ++i)
+        (*piece_of_point)[i] = piece_of_site_[site_of_point_[representative_[i]]];
     }
     return result;
   }
@@ -480,6 +481,7 @@ class ConcaveHull {
   std::vector<std::uint32_t> site_of_point_;
   std::vector<std::uint32_t> parent_;        // union-find over sites
   std::vector<std::int32_t> piece_of_root_;  // union-find root -> polygon index or -1
+  std::vector<std::int32_t> piece_of_site_;  // site -> polygon index or -1
   std::vector<std::uint8_t> kept_;  // per Voronoi vertex: its Delaunay face is in the shape
   std::vector<DirectedEdge> boundary_;
   std::vector<std::uint8_t> used_;
