@@ -13,8 +13,9 @@
 // pruned Voronoi graph of the SLAM sparse point map; it localizes on that map while driving
 // (odometry prediction, each 2D scan registered against the map with the SLAM setup's ICP) and
 // follows the path with Indiveri's path tracker and pose controller steering by that estimate,
-// with the reactive behaviours on the pitching scanner's obstacle map. A box blocks the corridor
-// after planning; the latest scan shows it on the path, its edge is blocked and the path
+// with the reactive behaviours on the pitching scanner's obstacle map. After planning a box blocks
+// the corridor and a can too low for the 2D laser stands in the kitchen; the latest 2D scan shows
+// the box on the path, the obstacle map the can, each time the edge is blocked and the path
 // re-planned (demo_out/navigation.svg: SLAM map, pruned graph, plans, driven trajectory, paper 000
 // Fig. 6a). The simulator's truth only scores the run: the JSON reports goal_reached (true pose
 // within 10 cm and 5 deg), replans, min_clearance_m, contacts and the localization error
@@ -246,9 +247,10 @@ struct NavigationResult {
 /// sparse point map the mapping tour built, follows the path with Indiveri's tracker and
 /// finishes with the pose controller, both steering by the pose estimated on that map (odometry
 /// prediction + scan registration, MapLocalizer). The reactive behaviours keep the roadway clear on
-/// the pitching scanner's obstacle map, and the path is re-planned when the latest scan shows an
-/// obstacle on it: a box blocks the corridor after planning. The simulator's truth is used only
-/// to score the run. Draws demo_out/navigation.svg (paper 000 Fig. 6a).
+/// the pitching scanner's obstacle map, and the path is re-planned when the latest 2D scan or the
+/// obstacle map shows an obstacle on it: a box blocks the corridor and a can stands in the kitchen.
+/// The simulator's truth is used only to score the run. Draws demo_out/navigation.svg (paper 000
+/// Fig. 6a).
 NavigationResult run_navigation(const Scene& scene, const OnlineSlam& slam,
                                 const DifferentialDriveParams& robot_params, unsigned seed) {
   NavigationResult out;
@@ -287,9 +289,11 @@ NavigationResult run_navigation(const Scene& scene, const OnlineSlam& slam,
   const PlannedPath first_plan = plan.path;
 
   // After planning, a stack of boxes blocks the corridor between the living room's door and the
-  // kitchen's (the map does not know it).
+  // kitchen's, and a can (10 cm, below the 2D laser's plane: only the pitching scanner's obstacle
+  // map shows it) stands on the kitchen floor west of the dining table. The map knows neither.
   World world = scene.world;
   world.add_box({{4.4, 5.6}, {0.4, 1.2}, 0.0, 0.0, 0.9});
+  world.add_cylinder({{6.59, 3.15}, 0.05, 0.0, 0.10});
   world.build_index();
 
   std::mt19937 rng(seed), laser_rng(seed + 1);

@@ -173,6 +173,11 @@ TEST_CASE("sweeps are segmented at pitch reversals and motion-compensated to the
       worst = std::max(worst, std::abs(p.x() - (3.0 - s.base_pose.x)));
     CHECK(worst < 1e-9);
     CHECK(s.poses.back().x - s.poses.front().x > 0.1);
+    // Each row's sensor origin in the base frame: t_s moved along with the robot.
+    REQUIRE(s.origins.size() == s.scan_count());
+    for (std::size_t r = 0; r < s.scan_count(); ++r)
+      CHECK(s.origins[r].isApprox(Point3d(t_s.x() + s.poses[r].x - s.base_pose.x, t_s.y(), t_s.z()),
+                                  1e-12));
     // Its structure scan sees the wall straight ahead.
     const LaserScan<double> st = structure_scan(s);
     const std::size_t ahead = st.size() / 2;

@@ -257,8 +257,11 @@ template <std::floating_point Scalar = double>
 struct Sweep {
   Pose2<Scalar> base_pose{};
   Cloud<3, Scalar> cloud{};
-  std::vector<Scalar> pitches;            ///< pitch of each row
-  std::vector<Pose2<Scalar>> poses;       ///< odometry pose of each row
+  std::vector<Scalar> pitches;       ///< pitch of each row
+  std::vector<Pose2<Scalar>> poses;  ///< odometry pose of each row
+  /// The scanner's pitch axis (Eq. 3's t_s) for each row, in the base frame: the origin of the
+  /// row's beams, from which the floor classification judges each reading's height noise.
+  std::vector<Point<3, Scalar>> origins;
   bool starts_after_interruption{false};  ///< began mid-movement after a fast turn
 
   [[nodiscard]] std::size_t scan_count() const { return pitches.size(); }
@@ -334,6 +337,7 @@ class SweepAssembler {
     if (current_.pitches.empty() || current_.cloud.width != w) {
       current_.pitches.clear();
       current_.poses.clear();
+      current_.origins.clear();
       current_.cloud.points.clear();
       current_.cloud.width = w;
       current_.cloud.height = 0;
@@ -349,6 +353,8 @@ class SweepAssembler {
     ++current_.cloud.height;
     current_.pitches.push_back(scan.pitch);
     current_.poses.push_back(pose);
+    const Point<2, Scalar> axis = shift.transform_point(params_.sensor_offset.template head<2>());
+    current_.origins.emplace_back(axis.x(), axis.y(), params_.sensor_offset.z());
   }
 
   bool finish() {

@@ -418,6 +418,8 @@ class SweepReducer {
     open_.clear();
     all_planes_.clear();
     for (std::size_t r = 0; r < height; ++r) {
+      // The row's sensor origin gives each reading its own noise threshold (floor.hpp).
+      const Vec3* origin = sweep.origins.size() == height ? &sweep.origins[r] : nullptr;
       // Step 4 on the organised sweep (it needs the neighbouring scans), step 1 per scan.
       centroids_.clear();
       sizes_.clear();
@@ -443,7 +445,7 @@ class SweepReducer {
                     params_.cluster_distance * params_.cluster_distance;
           if (!joins) break;
           sum += q;
-          if (classify_point(grid, width, height, r, c, params_.floor) == PointClass::floor)
+          if (classify_point(grid, width, height, r, c, params_.floor, origin) == PointClass::floor)
             ++floor_count;
           ++c;
         }

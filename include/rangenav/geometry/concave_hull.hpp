@@ -101,26 +101,27 @@ class ConcaveHull {
     constexpr std::string_view where = "ConcaveHull::compute";
     const IntegerGrid grid{params_.resolution};
     const std::size_t n = traits::size(cloud);
+    const double inv = 1.0 / grid.resolution;
     snapped_.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
       const Point2d p = traits::point(cloud, i).template cast<double>();
-      const double gx = std::round(p.x() / grid.resolution);
-      const double gy = std::round(p.y() / grid.resolution);
+      const double gx = p.x() * inv, gy = p.y() * inv;
       if (std::abs(gx) <= IntegerGrid::limit && std::abs(gy) <= IntegerGrid::limit)
-        snapped_[i] = {static_cast<std::int32_t>(gx), static_cast<std::int32_t>(gy)};
+        snapped_[i] = {round_half_away(gx), round_half_away(gy)};
       else  // NaN or out of range: the grid names the point in its message
         snapped_[i] = grid.snap(p, where, "cloud[" + std::to_string(i) + "]");
     }
     select_sites();
     auto result = build(grid);
-    for (std::size_t i = 0; i < n; ++i)  // thinned points belong to their cell's site
-      if (representative_[i] != i) site_of_point_[i] = site_of_point_[representative_[i]];
-    if (piece_of_point) {
-      piece_of_point->assign(n, -1);
-      for (std::size_t i = 0; i < n; ++i) {
-        const std::uint32_t root = find(site_of_point_[i]);
-        (*piece_of_point)[i] = root < piece_of_root_.size() ? piece_of_root_[root] : -1;
+    if (piece_of_point) {  // per site, then per point through its site (a thinned point: its
+      piece_of_site_.resize(sites_.size());  // representative's)
+      for (std::size_t s = 0; s < sites_.size(); ++s) {
+        const std::uint32_t root = find(static_cast<std::uint32_t>(s));
+        piece_of_site_[s] = root < piece_of_root_.size() ? piece_of_root_[root] : -1;
       }
+      piece_of_point->resize(n);
+      for (std::size_t i = 0; i < n; ++i)
+        (*piece_of_point)[i] = piece_of_site_[site_of_point_[representative_[i]]];
     }
     return result;
   }
@@ -148,19 +149,22 @@ class ConcaveHull {
     };
     const double cell_steps = std::floor(params_.thinning * params_.alpha / params_.resolution);
     if (!(cell_steps >= 2) || n < 64) return keep_all();
-    const auto k = static_cast<std::int64_t>(cell_steps);
-    const auto cell_of = [k](std::int32_t v) {  // floor division
-      const std::int64_t q = std::int64_t(v) / k;
-      return (std::int64_t(v) % k != 0 && v < 0) ? q - 1 : q;
+    const auto k = static_cast<std::int64_t>(std::min(cell_steps, IntegerGrid::limit));
+    const auto k32 = static_cast<std::int32_t>(k);
+    const auto cell_of = [k32](std::int32_t v) -> std::int64_t {  // floor division
+      const std::int32_t q = v / k32;
+      return (q * k32 != v && v < 0) ? q - 1 : q;
     };
-    std::int64_t x0 = std::numeric_limits<std::int64_t>::max(), y0 = x0;
-    std::int64_t x1 = std::numeric_limits<std::int64_t>::min(), y1 = x1;
+    std::int32_t gx0 = std::numeric_limits<std::int32_t>::max(), gy0 = gx0;
+    std::int32_t gx1 = std::numeric_limits<std::int32_t>::min(), gy1 = gx1;
     for (const cell_type& g : snapped_) {
-      x0 = std::min(x0, cell_of(g[0]));
-      x1 = std::max(x1, cell_of(g[0]));
-      y0 = std::min(y0, cell_of(g[1]));
-      y1 = std::max(y1, cell_of(g[1]));
+      gx0 = std::min(gx0, g[0]);
+      gx1 = std::max(gx1, g[0]);
+      gy0 = std::min(gy0, g[1]);
+      gy1 = std::max(gy1, g[1]);
     }
+    const std::int64_t x0 = cell_of(gx0), x1 = cell_of(gx1);  // floor division is monotonic
+    const std::int64_t y0 = cell_of(gy0), y1 = cell_of(gy1);
     // A dense cell array with a margin of one empty cell on each side; skipped (no thinning)
     // when it would be much larger than the input.
     const std::int64_t w = x1 - x0 + 3, h = y1 - y0 + 3;
@@ -395,6 +399,13 @@ class ConcaveHull {
     return result;
   }
 
+  /// std::round for |v| <= IntegerGrid::limit, without the library call.
+  static std::int32_t round_half_away(double v) {
+    const auto t = static_cast<std::int32_t>(v);  // towards zero
+    const double frac = v - double(t);
+    return frac >= 0.5 ? t + 1 : frac <= -0.5 ? t - 1 : t;
+  }
+
   /// Union-find root with path halving.
   std::uint32_t find(std::uint32_t i) {
     while (parent_[i] != i)
@@ -470,6 +481,7 @@ class ConcaveHull {
   std::vector<std::uint32_t> site_of_point_;
   std::vector<std::uint32_t> parent_;        // union-find over sites
   std::vector<std::int32_t> piece_of_root_;  // union-find root -> polygon index or -1
+  std::vector<std::int32_t> piece_of_site_;  // site -> polygon index or -1
   std::vector<std::uint8_t> kept_;  // per Voronoi vertex: its Delaunay face is in the shape
   std::vector<DirectedEdge> boundary_;
   std::vector<std::uint8_t> used_;

@@ -19,6 +19,7 @@
 //   without a chain of image neighbours between them (e.g. through a depth discontinuity).
 
 #include <algorithm>
+#include <cmath>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
@@ -134,7 +135,10 @@ template <class Scalar>
   // the larger root under the smaller, so every root is its component's smallest index.
   std::vector<std::uint32_t> parent(n);
   for (std::size_t i = 0; i < n; ++i)
-    parent[i] = points[i].allFinite() ? static_cast<std::uint32_t>(i) : none;
+    parent[i] =
+        std::isfinite(points[i].x()) && std::isfinite(points[i].y()) && std::isfinite(points[i].z())
+            ? static_cast<std::uint32_t>(i)
+            : none;
   const auto find = [&](std::uint32_t i) {
     while (parent[i] != i)
       i = parent[i] = parent[parent[i]];

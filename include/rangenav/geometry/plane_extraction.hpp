@@ -13,9 +13,14 @@
 //
 // Beyond the paper: a RANSAC plane's inliers may fall into several pieces (coplanar surfaces that
 // do not touch, or thin strips where the band of the plane crosses other surfaces). Only the
-// largest connected piece of the alpha shape is taken as the surface and refitted; the other
-// inliers stay in the cluster, so a second coplanar surface becomes a plane of its own and a
-// strip of a wall cannot tilt a table top in the least-squares refit.
+// largest connected piece is taken as the surface and refitted; the other inliers stay in the
+// cluster, so a second coplanar surface becomes a plane of its own and a strip of a wall cannot
+// tilt a table top in the least-squares refit. Before the refit the pieces are groups of
+// neighbouring occupied cells of alpha / 2 (cheap); after it, the pieces of the alpha shape.
+//
+// For speed (beyond the paper, same method): RANSAC hypotheses are scored on a random subset of
+// the cluster (`evaluation_subset`) and only the best is counted on all of it; the hull thins the
+// plane's interior (ConcaveHullParams::thinning, 0.5 here); scratch buffers are reused.
 //
 // Randomness comes from the caller's engine: with the same engine state the result is identical.
 
@@ -25,6 +30,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <random>
@@ -124,7 +130,9 @@ class PlaneExtractor {
         detail::throw_invalid_argument(
             "PlaneExtractor::extract", "cluster index", i,
             "must be < points.size() = " + std::to_string(points.size()));
-      if (points[i].allFinite()) remaining_.push_back(i);
+      const Point3d& p = points[i];
+      if (std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()))
+        remaining_.push_back(i);
     }
     const std::size_t min_remaining = std::max<std::size_t>(
         3, params_.min_remaining != 0 ? params_.min_remaining : params_.min_inliers);
@@ -132,36 +140,39 @@ class PlaneExtractor {
     while (remaining_.size() >= min_remaining) {
       const std::optional<Plane3<double>> hypothesis = ransac(points, rng);
       if (!hypothesis) break;
-      // Two rounds: inliers of the plane -> their largest connected piece (alpha shape in the
-      // plane's frame) -> least-squares refit on that piece; the second round collects the
-      // inliers of the refitted plane, whose band covers the whole surface. The other inliers
-      // stay in the cluster for the next planes.
+      // Two rounds. 1: the inliers of the RANSAC plane -> their largest connected piece -> least-
+      // squares refit on it (a strip of another surface crossing the band cannot tilt the
+      // plane). 2: the inliers of the refitted plane, whose band covers the whole surface ->
+      // alpha shape (in the plane's frame) -> its largest piece is the surface -> refit. The
+      // other inliers stay in the cluster for the next planes. Round 1's pieces are the
+      // 8-connected groups of occupied cells of alpha / 2 (points of neighbouring cells are at
+      // most 1.4 alpha apart, where the alpha shape joins points up to 2 alpha apart), which
+      // is much cheaper than a triangulation and only decides what the refit sees.
       Plane3<double> plane = *hypothesis;
-      PlaneFrame<double> hull_frame;
-      std::vector<Polygon2<double>> pieces;
-      std::size_t surface = 0;
-      for (int round = 0; round < 2; ++round) {
-        const std::size_t count = split_inliers(points, plane);
-        hull_frame = PlaneFrame<double>::of(plane);
-        projected_.resize(count);
-        for (std::size_t k = 0; k < count; ++k)
-          projected_[k] = hull_frame.to_plane(points[remaining_[k]]);  // Eq. (1)-(3)
-        pieces = hull_.compute(projected_, &piece_);
-        surface = 0;  // stable partition: the largest piece's points first
-        others_.clear();
-        for (std::size_t k = 0; k < count; ++k)
-          if (piece_[k] == 0)
-            remaining_[surface++] = remaining_[k];
-          else
-            others_.push_back(remaining_[k]);
-        std::copy(others_.begin(), others_.end(),
-                  remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
-        if (pieces.empty() || surface < params_.min_inliers) break;
-        const std::optional<Plane3<double>> refit = fit_least_squares(points, surface, plane);
-        if (!refit || !admissible(refit->normal)) break;
+      std::size_t surface = largest_cell_piece(points, split_inliers(points, plane), plane);
+      if (surface < params_.min_inliers) break;
+      if (const auto refit = fit_least_squares(points, surface, plane);
+          refit && admissible(refit->normal))
         plane = *refit;
-      }
+      const std::size_t count = split_inliers(points, plane);
+      const PlaneFrame<double> hull_frame = PlaneFrame<double>::of(plane);
+      projected_.resize(count);
+      for (std::size_t k = 0; k < count; ++k)
+        projected_[k] = hull_frame.to_plane(points[remaining_[k]]);  // Eq. (1)-(3)
+      std::vector<Polygon2<double>> pieces = hull_.compute(projected_, &piece_);
+      surface = 0;  // stable partition: the largest piece's points first
+      others_.clear();
+      for (std::size_t k = 0; k < count; ++k)
+        if (piece_[k] == 0)
+          remaining_[surface++] = remaining_[k];
+        else
+          others_.push_back(remaining_[k]);
+      std::copy(others_.begin(), others_.end(),
+                remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
       if (pieces.empty() || surface < params_.min_inliers) break;
+      if (const auto refit = fit_least_squares(points, surface, plane);
+          refit && admissible(refit->normal))
+        plane = *refit;
       if (params_.viewpoint && plane.signed_distance(*params_.viewpoint) < 0)
         plane = plane.flipped();
       emit(points, surface, plane, hull_frame, std::move(pieces.front()), out);
@@ -243,20 +254,104 @@ class PlaneExtractor {
                                                   std::size_t count,
                                                   const Plane3<double>& side) const {
     if (count < 3) return std::nullopt;
+    // One pass: sums of q = p - p0 and of q q^T (shifted by the first point for precision).
+    const Point3d p0 = points[remaining_[0]];
     Point3d sum = Point3d::Zero();
-    for (std::size_t k = 0; k < count; ++k)
-      sum += points[remaining_[k]];
-    const Point3d centroid = sum / double(count);
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
     for (std::size_t k = 0; k < count; ++k) {
-      const Point3d q = points[remaining_[k]] - centroid;
-      cov.noalias() += q * q.transpose();
+      const Point3d q = points[remaining_[k]] - p0;
+      sum += q;
+      xx += q.x() * q.x();
+      xy += q.x() * q.y();
+      xz += q.x() * q.z();
+      yy += q.y() * q.y();
+      yz += q.y() * q.z();
+      zz += q.z() * q.z();
     }
+    const double inv = 1.0 / double(count);
+    const Point3d mean = sum * inv;
+    const Point3d centroid = p0 + mean;
+    Eigen::Matrix3d cov;  // covariance times count
+    cov << xx, xy, xz, xy, yy, yz, xz, yz, zz;
+    cov.noalias() -= double(count) * mean * mean.transpose();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
     Point3d normal = eig.eigenvectors().col(0);
     if (!normal.allFinite() || normal.norm() < 0.5) return std::nullopt;
     if (normal.dot(side.normal) < 0) normal = -normal;
     return Plane3<double>::through(centroid, normal);
+  }
+
+  /// Round 1's piece: moves the points of the largest 8-connected group of occupied cells of
+  /// alpha / 2, among the `count` inliers at the front of remaining_ (projected onto `plane`), to
+  /// the front (stably); returns their count.
+  std::size_t largest_cell_piece(std::span<const Point3d> points, std::size_t count,
+                                 const Plane3<double>& plane) {
+    if (count == 0) return 0;
+    const PlaneFrame<double> frame = PlaneFrame<double>::of(plane);
+    const double inv = 2.0 / params_.hull.alpha;
+    projected_.resize(count);
+    double x0 = std::numeric_limits<double>::max(), y0 = x0;
+    double x1 = std::numeric_limits<double>::lowest(), y1 = x1;
+    for (std::size_t k = 0; k < count; ++k) {
+      const Point2d q = frame.to_plane(points[remaining_[k]]) * inv;  // in cells, Eq. (1)-(3)
+      projected_[k] = q;
+      x0 = std::min(x0, q.x());
+      x1 = std::max(x1, q.x());
+      y0 = std::min(y0, q.y());
+      y1 = std::max(y1, q.y());
+    }
+    // Cells with a margin of one on each side; a plane too large for a dense grid of a few
+    // cells per point is taken as one piece.
+    x0 = std::floor(x0) - 1;
+    y0 = std::floor(y0) - 1;
+    const double wd = std::floor(x1) - x0 + 2, hd = std::floor(y1) - y0 + 2;
+    if (!(wd * hd <= 4.0 * double(count) + 4096)) return count;
+    const auto w = static_cast<std::size_t>(wd), h = static_cast<std::size_t>(hd);
+    constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+    cells_.assign(w * h, none);  // union-find parent per occupied cell
+    piece_.resize(count);        // the cell of each inlier, then reused below
+    for (std::size_t k = 0; k < count; ++k) {
+      const auto cx = static_cast<std::size_t>(projected_[k].x() - x0);  // >= 1, truncation
+      const auto cy = static_cast<std::size_t>(projected_[k].y() - y0);  // is floor here
+      const std::size_t c = cy * w + cx;
+      cells_[c] = static_cast<std::uint32_t>(c);
+      piece_[k] = static_cast<std::int32_t>(c);
+    }
+    const auto find = [&](std::uint32_t i) {
+      while (cells_[i] != i)
+        i = cells_[i] = cells_[cells_[i]];
+      return i;
+    };
+    for (std::size_t c = w; c + w < w * h; ++c) {
+      if (cells_[c] == none) continue;
+      for (const std::size_t nb : {c + 1, c + w - 1, c + w, c + w + 1})
+        if (cells_[nb] != none) {
+          const std::uint32_t a = find(static_cast<std::uint32_t>(c)),
+                              b = find(static_cast<std::uint32_t>(nb));
+          if (a != b) cells_[std::max(a, b)] = std::min(a, b);
+        }
+    }
+    // Points per root (counted in cell_count_, indexed by root cell), the largest group.
+    cell_count_.assign(w * h, 0);
+    std::uint32_t best = 0, best_count = 0;
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::uint32_t root = find(static_cast<std::uint32_t>(piece_[k]));
+      piece_[k] = static_cast<std::int32_t>(root);
+      if (++cell_count_[root] > best_count || (cell_count_[root] == best_count && root < best)) {
+        best_count = cell_count_[root];
+        best = root;
+      }
+    }
+    std::size_t surface = 0;  // stable partition
+    others_.clear();
+    for (std::size_t k = 0; k < count; ++k)
+      if (static_cast<std::uint32_t>(piece_[k]) == best)
+        remaining_[surface++] = remaining_[k];
+      else
+        others_.push_back(remaining_[k]);
+    std::copy(others_.begin(), others_.end(),
+              remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
+    return surface;
   }
 
   /// Moves the inliers of `plane` to the front of remaining_; returns their count.
@@ -315,6 +410,8 @@ class PlaneExtractor {
   std::vector<std::int32_t> piece_;
   std::vector<std::uint32_t> others_;
   std::vector<Point3d> subset_;
+  std::vector<std::uint32_t> cells_;
+  std::vector<std::uint32_t> cell_count_;
 };
 
 }  // namespace rangenav

@@ -243,34 +243,52 @@ class DoorAwareMcl {
     return a;
   }
 
+  /// Door k's opening angle over the particle set: the weighted mean of the particles' means and
+  /// the variance of the mixture (mean of their variances plus the spread of their means).
+  [[nodiscard]] DoorAngleEstimate door_estimate(std::size_t k) const {
+    const double mean = door_angle(k);
+    double var = 0;
+    for (const auto& p : filter_.particles()) {
+      const double d = p.state.doors[k].mean - mean;
+      var += p.weight * (p.state.doors[k].variance + d * d);
+    }
+    return {mean, var};
+  }
+
+  /// log p(z_j | x, doors) of one beam end point `e` in the map frame: the better of the static
+  /// map's likelihood field and the leaves of the doors at the angles estimated in `x` (maximum
+  /// likelihood association, §IV.2); the door term is Eq. (6) to first order. x.pose is not used.
+  [[nodiscard]] double end_point_log_likelihood(const Point2d& e, const DoorAwareState& x) const {
+    const double sigma_sq = params_.field.sigma_hit * params_.field.sigma_hit;
+    const double z_rand = params_.field.z_rand / params_.field.range_max;
+    double best = field_.log_likelihood_at(e);
+    for (std::size_t k = 0; k < doors_.size(); ++k) {
+      const DoorModel& d = doors_[k];
+      const Point2d r = e - d.hinge;
+      const double reach = d.leaf_length + 3 * params_.field.sigma_hit;
+      if (r.squaredNorm() > reach * reach) continue;
+      const double a = d.reference_angle + x.doors[k].mean;
+      const Point2d dir(std::cos(a), std::sin(a));
+      const double t = std::clamp(r.dot(dir), 0.0, d.leaf_length);
+      const double dist_sq = (r - t * dir).squaredNorm();
+      // Eq. (6) to first order: the distance moves by t per radian of the leaf.
+      const double var = sigma_sq + t * t * x.doors[k].variance;
+      const double p = params_.field.z_hit * std::exp(-0.5 * dist_sq / var) /
+                           std::sqrt(2 * std::numbers::pi * var) +
+                       z_rand;
+      best = std::max(best, std::log(p));
+    }
+    return best;
+  }
+
   /// log p(z | x, doors) of one particle (Eq. 5, ML association per beam, Eq. 6 linearised).
   [[nodiscard]] double log_likelihood(const DoorAwareState& x,
                                       const DoorAwareObservation& z) const {
     const double c = std::cos(x.pose.theta), s = std::sin(x.pose.theta);
-    const double sigma_sq = params_.field.sigma_hit * params_.field.sigma_hit;
-    const double z_rand = params_.field.z_rand / params_.field.range_max;
     double sum = 0;
-    for (const Eigen::Vector2f& q : z.end_points) {
-      const Point2d e(x.pose.x + c * q.x() - s * q.y(), x.pose.y + s * q.x() + c * q.y());
-      double best = field_.log_likelihood_at(e);
-      for (std::size_t k = 0; k < doors_.size(); ++k) {
-        const DoorModel& d = doors_[k];
-        const Point2d r = e - d.hinge;
-        const double reach = d.leaf_length + 3 * params_.field.sigma_hit;
-        if (r.squaredNorm() > reach * reach) continue;
-        const double a = d.reference_angle + x.doors[k].mean;
-        const Point2d dir(std::cos(a), std::sin(a));
-        const double t = std::clamp(r.dot(dir), 0.0, d.leaf_length);
-        const double dist_sq = (r - t * dir).squaredNorm();
-        // Eq. (6) to first order: the distance moves by t per radian of the leaf.
-        const double var = sigma_sq + t * t * x.doors[k].variance;
-        const double p = params_.field.z_hit * std::exp(-0.5 * dist_sq / var) /
-                             std::sqrt(2 * std::numbers::pi * var) +
-                         z_rand;
-        best = std::max(best, std::log(p));
-      }
-      sum += best;
-    }
+    for (const Eigen::Vector2f& q : z.end_points)
+      sum += end_point_log_likelihood(
+          Point2d(x.pose.x + c * q.x() - s * q.y(), x.pose.y + s * q.x() + c * q.y()), x);
     return sum;
   }
 
