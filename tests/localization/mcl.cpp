@@ -463,10 +463,10 @@ BackwardSteps backward_corrected_steps(const CorrectedLog& log) {
 /// plain occupancy mapping (classify_dynamic = false) with miss_probability 0.49 instead of 0.4,
 /// so that a beam passing through a wall that an inconsistent pass put elsewhere only dents it
 /// (log-odds -0.04 per miss against +0.85 per hit). With the default 0.4 the passes of FR079
-/// whose corrected poses disagree erase each other's walls: standard MCL from scan 1402 on (300
-/// particles, every other scan) then has mean 0.10-0.11 m, max 0.9-1.0 m against the corrected
-/// poses, and from the start it diverges in most seeds; with 0.49: 0.066-0.068 m, 0.5-0.6 m, and
-/// no divergence from the start with 1000 particles on every scan (measured, seeds 1-4).
+/// whose corrected poses disagree erase each other's walls: standard MCL (300 particles, every
+/// other scan, seeds 1-3) then has mean 0.084-0.091 m, max 0.65-0.86 m from scan 1402 on and
+/// loses the map before scan 1373 (0.52-0.57 m mean); with 0.49: 0.063-0.065 m, 0.49-0.58 m and
+/// 0.089-0.093 m, 1.43-1.46 m.
 OccupancyGrid corrected_log_map(const CorrectedLog& log, std::size_t map_step) {
   Point2d lo = Point2d::Constant(1e18), hi = -lo;
   for (const auto& l : log.lasers) {
@@ -552,8 +552,8 @@ TEST_CASE("mcl: tracking on the corrected Intel log from raw odometry", "[locali
   const BackwardSteps back = backward_corrected_steps(log);
   CHECK(back.metres < 0.5);
   // 300 particles, every scan (910, about 0.55 m apart); measured over seeds 1-3: mean
-  // 0.057-0.060 m, max 0.31-0.34 m (with the default miss_probability 0.4 grid: 0.078-0.080 m,
-  // 0.46-0.53 m).
+  // 0.054-0.058 m, max 0.29-0.34 m (with the default miss_probability 0.4 grid: 0.065-0.066 m,
+  // 0.33-0.38 m).
   const RealRun r = track_real_log(log, corrected_log_map(log, 1), {});
   WARN("intel: MCL vs corrected poses over "
        << r.scans << " scans: mean " << r.mean_err << " m, max " << r.max_err << " m, final "
@@ -576,19 +576,21 @@ TEST_CASE("mcl: tracking on the corrected FR079 log from raw odometry", "[locali
   // scans: 3 m backwards while the robot drove 3 m forwards, so the corrected frame shifts by
   // about 6 m along the corridor), single steps up to scan 4618. A tracker that follows the
   // robot is metres from the corrected poses after such a run until it finds the map again,
-  // which standard MCL (no recovery) may not: over the whole log, 1000 particles on every scan
-  // give mean 0.22-0.27 m, max 5.3-5.4 m at scans 1403-1413 (seeds 1-4), 300 particles on
-  // every other scan lose the map after scan 1401 in 1 of 8 seeds. So the filter is checked
-  // on both sides of the longest run, restarted after it.
+  // which standard MCL (no recovery) may not. Over the whole log it does here (seeds 1-8, 300
+  // particles, every other scan: mean 0.15-0.16 m, max 5.7-6.0 m at scan 1412; 1000 particles
+  // on every scan, seeds 1-4: 0.22-0.26 m, 5.2-5.4 m), but before the occupancy grid's
+  // surface margin 1 of those 8 seeds lost the map after scan 1401. So the filter is checked
+  // on both sides of the longest run, restarted after it, where the corrected poses are a
+  // fair reference.
   const BackwardSteps back = backward_corrected_steps(log);
   WARN("fr079: corrected poses step backwards over "
        << back.metres << " m in " << back.steps << " steps; longest run: scans " << back.run_first
        << "-" << back.run_last);
   CHECK(back.metres > 5.0);
   CHECK(back.run_last - back.run_first >= 20);
-  // Every other scan, grid from every other scan, 300 particles. Measured over seeds 1-6:
-  // before the run mean 0.088-0.092 m, max 1.4 m (at scan 918, the end of the 908-916 run);
-  // after it 0.066-0.068 m, 0.5-0.6 m (at scans 1816 and 4270, single backward steps).
+  // Every other scan, grid from every other scan, 300 particles. Measured over seeds 1-3:
+  // before the run mean 0.089-0.093 m, max 1.43-1.46 m (at scan 918, the end of the 908-916
+  // run); after it 0.063-0.065 m, 0.49-0.58 m (at scans 1734-1816, single backward steps).
   const OccupancyGrid grid = corrected_log_map(log, 2);
   RealRunOptions before;
   before.scan_step = 2;
