@@ -15,8 +15,10 @@
 //      ranges, and below it the likelihood field of the static map with the door states
 //      door-aware MCL estimated (doors 30 deg open); end with one JSON line.
 // `07_doors --global [runs] [distance] [particle counts...]` instead measures global-localization
-// success rates of both filters (the paper's Fig. 8-9) with doors closed and 30 deg open
-// (defaults: 10 runs, 12 m, 1k 5k 10k 50k particles).
+// success rates of both filters (the paper's Fig. 8-9) with doors closed and 30 deg open, in the
+// plain corridor (symmetric under a half turn) and with a copier alcove that breaks the symmetry,
+// with the likelihood field's sigma_hit 0.2 m and 0.8 m (defaults: 10 runs, 12 m, 1k 5k 10k 50k
+// particles).
 //
 // Run it as `07_doors [seed]`.
 
@@ -171,7 +173,7 @@ std::pair<GlobalOutcome, GlobalOutcome> global_run(const sim::World& world,
                                                    const OccupancyGrid& grid,
                                                    const std::vector<DoorModel>& doors,
                                                    std::size_t particles, double distance,
-                                                   std::uint64_t seed) {
+                                                   double sigma_hit, std::uint64_t seed) {
   sim::LaserScannerParams lp;
   lp.geometry = ScanGeometry<double>::from_fov(std::numbers::pi, deg_to_rad(1.0), 0.05, 30.0);
   const sim::LaserScanner2D laser(lp);
@@ -187,9 +189,12 @@ std::pair<GlobalOutcome, GlobalOutcome> global_run(const sim::World& world,
   MclParams mp;
   mp.min_particles = std::min<std::size_t>(500, particles);
   mp.max_particles = particles;
-  MonteCarloLocalization<> mcl(OdometryMotionModel(motion), LikelihoodFieldModel(grid), mp);
+  LikelihoodFieldParams field;
+  field.sigma_hit = sigma_hit;
+  MonteCarloLocalization<> mcl(OdometryMotionModel(motion), LikelihoodFieldModel(grid, field), mp);
   DoorAwareMclParams dp;
   dp.motion = motion;
+  dp.field = field;
   dp.sampling = mp;
   DoorAwareMcl door_mcl(grid, doors, dp);
   mcl.initialize_uniform(grid, particles, rng_a);
@@ -228,6 +233,106 @@ std::string fixed(double v, int digits = 3) {
   return s.str();
 }
 
+/// Step 1-2: the corridor (`alcove`: with its copier alcove) mapped with known poses while the
+/// doors change between passes (open 90 deg, closed, open 45 deg), the doors detected and removed
+/// from the static grid. Prints what it found when `verbose`.
+struct CorridorMap {
+  OccupancyGrid grid;
+  std::vector<DoorModel> doors;
+  std::size_t true_doors{0};
+};
+
+CorridorMap map_corridor(bool alcove, std::uint64_t seed, bool verbose) {
+  const std::vector<std::vector<double>> passes = {std::vector<double>(8, 90 * deg),
+                                                   std::vector<double>(8, 0.0),
+                                                   std::vector<double>(8, 45 * deg)};
+  CorridorMap m{OccupancyGrid::covering({0, -4}, {20, 6}, 0.5), {}, 0};
+  DoorDetector detector;
+  const sim::LaserScanner2D mapping_laser;  // SICK S300: 270 deg, 541 beams
+  std::mt19937_64 rng(seed);
+  ScanClassification c;
+  std::size_t dynamic = 0, vanished = 0;
+  std::vector<sim::Door> true_doors;
+  for (std::size_t pass = 0; pass < passes.size(); ++pass) {
+    const sim::Scene scene = sim::office_corridor(passes[pass], alcove);
+    true_doors = scene.world.doors();
+    for (int k = 0; k <= 94; ++k) {
+      const bool east = pass % 2 == 0;
+      const Pose2d pose{east ? 0.6 + 0.2 * k : 19.4 - 0.2 * k, 1.0, east ? 0.0 : std::numbers::pi};
+      m.grid.integrate(pose, mapping_laser.scan(scene.world, pose, rng), c);
+      dynamic += c.dynamic_points.size();
+      vanished += c.vanished_points.size();
+      detector.add(c);
+    }
+  }
+  m.doors = detector.doors();
+  m.true_doors = true_doors.size();
+  if (verbose) {
+    std::cout << "mapping: " << dynamic << " dynamic readings, " << vanished << " vanished cells, "
+              << detector.potential_leaves().size() << " potential door leaves\n";
+    // Doors: where lines turned about a common hinge.
+    for (const DoorModel& d : m.doors) {
+      double nearest = 1e9;
+      for (const auto& t : true_doors)
+        nearest = std::min(nearest, (t.hinge - d.hinge).norm());
+      std::cout << "door: hinge (" << fixed(d.hinge.x(), 2) << ", " << fixed(d.hinge.y(), 2)
+                << "), leaf " << fixed(d.leaf_length, 2) << " m, opening range "
+                << fixed(d.opening_max / deg, 0) << " deg, " << fixed(nearest, 3)
+                << " m from the true hinge\n";
+    }
+  }
+  detector.remove_doors(m.grid);
+  return m;
+}
+
+/// `07_doors --global [runs] [distance] [counts...]`: global-localization success rates of both
+/// filters (the paper's Fig. 8-9) in the plain (symmetric) corridor and in the corridor with its
+/// copier alcove, with the likelihood field's sigma_hit at the tracking default (0.2 m) and
+/// widened to 0.8 m, doors closed and 30 deg open. Slow: see benchmarks/README.md.
+int run_global(int argc, char** argv) {
+  const std::uint64_t runs = argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 10;
+  const double distance = argc > 3 ? std::strtod(argv[3], nullptr) : 12.0;
+  std::vector<std::size_t> counts;
+  for (int i = 4; i < argc; ++i)
+    counts.push_back(std::strtoull(argv[i], nullptr, 10));
+  if (counts.empty()) counts = {1000, 5000, 10000, 50000};
+  std::string json;
+  for (const bool alcove : {false, true}) {
+    const CorridorMap map = map_corridor(alcove, 1, false);
+    std::cout << (alcove ? "corridor with the copier alcove" : "plain corridor") << ": "
+              << map.doors.size() << " of " << map.true_doors << " doors detected\n";
+    for (const double sigma_hit : {0.2, 0.8})
+      for (const double opening : {0.0, 30 * deg}) {
+        const sim::Scene scene = sim::office_corridor(std::vector<double>(8, opening), alcove);
+        for (const std::size_t n : counts) {
+          std::size_t mcl_ok = 0, door_ok = 0;
+          for (std::uint64_t r = 0; r < runs; ++r) {
+            const auto [a, b] =
+                global_run(scene.world, map.grid, map.doors, n, distance, sigma_hit, 100 + r);
+            mcl_ok += a.success ? 1 : 0;
+            door_ok += b.success ? 1 : 0;
+            std::cout << "  run " << r << ": MCL " << fixed(a.error_m, 2) << " m "
+                      << fixed(a.error_rad, 2) << " rad " << a.particles
+                      << " particles; door-aware " << fixed(b.error_m, 2) << " m "
+                      << fixed(b.error_rad, 2) << " rad " << b.particles << " particles\n"
+                      << std::flush;
+          }
+          const std::string key = std::string(alcove ? "alcove" : "plain") + "_sigma" +
+                                  fixed(sigma_hit, 1) + (opening == 0 ? "_closed_" : "_open30_") +
+                                  std::to_string(n);
+          std::cout << "global localization, " << key << ": MCL " << mcl_ok << "/" << runs
+                    << ", door-aware " << door_ok << "/" << runs << "\n"
+                    << std::flush;
+          json += std::string(json.empty() ? "" : ", ") + "\"" + key + "\": [" +
+                  std::to_string(mcl_ok) + ", " + std::to_string(door_ok) + "]";
+        }
+      }
+  }
+  std::cout << "{\"runs\": " << runs << ", \"distance_m\": " << fixed(distance, 1)
+            << ", \"successes_mcl_door_mcl\": {" << json << "}}\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -236,81 +341,11 @@ int main(int argc, char** argv) {
   const bool global = argc > 1 && std::string(argv[1]) == "--global";
   const std::uint64_t seed = argc > 1 && !global ? std::strtoull(argv[1], nullptr, 10) : 1;
 
-  // 1. Mapping with known poses while the doors change between passes.
-  const std::vector<std::vector<double>> passes = {std::vector<double>(8, 90 * deg),
-                                                   std::vector<double>(8, 0.0),
-                                                   std::vector<double>(8, 45 * deg)};
-  OccupancyGrid grid = OccupancyGrid::covering({0, -4}, {20, 6}, 0.5);
-  DoorDetector detector;
-  const sim::LaserScanner2D mapping_laser;  // SICK S300: 270 deg, 541 beams
-  std::mt19937_64 rng(seed);
-  ScanClassification c;
-  std::size_t dynamic = 0, vanished = 0;
-  std::vector<sim::Door> true_doors;
-  for (std::size_t pass = 0; pass < passes.size(); ++pass) {
-    const sim::Scene scene = sim::office_corridor(passes[pass]);
-    true_doors = scene.world.doors();
-    for (int k = 0; k <= 94; ++k) {
-      const bool east = pass % 2 == 0;
-      const Pose2d pose{east ? 0.6 + 0.2 * k : 19.4 - 0.2 * k, 1.0, east ? 0.0 : std::numbers::pi};
-      grid.integrate(pose, mapping_laser.scan(scene.world, pose, rng), c);
-      dynamic += c.dynamic_points.size();
-      vanished += c.vanished_points.size();
-      detector.add(c);
-    }
-  }
-  std::cout << "mapping: " << dynamic << " dynamic readings, " << vanished << " vanished cells, "
-            << detector.potential_leaves().size() << " potential door leaves\n";
-
-  // 2. Doors: where lines turned about a common hinge.
-  const std::vector<DoorModel>& doors = detector.doors();
-  for (const DoorModel& d : doors) {
-    double nearest = 1e9;
-    for (const auto& t : true_doors)
-      nearest = std::min(nearest, (t.hinge - d.hinge).norm());
-    std::cout << "door: hinge (" << fixed(d.hinge.x(), 2) << ", " << fixed(d.hinge.y(), 2)
-              << "), leaf " << fixed(d.leaf_length, 2) << " m, opening range "
-              << fixed(d.opening_max / deg, 0) << " deg, " << fixed(nearest, 3)
-              << " m from the true hinge\n";
-  }
-  detector.remove_doors(grid);
-
-  if (global) {
-    // `07_doors --global runs distance n1 n2 ...`
-    const std::uint64_t runs = argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 10;
-    const double distance = argc > 3 ? std::strtod(argv[3], nullptr) : 12.0;
-    std::vector<std::size_t> counts;
-    for (int i = 4; i < argc; ++i)
-      counts.push_back(std::strtoull(argv[i], nullptr, 10));
-    if (counts.empty()) counts = {1000, 5000, 10000, 50000};
-    std::string json;
-    for (const double opening : {0.0, 30 * deg}) {
-      const sim::Scene scene = sim::office_corridor(std::vector<double>(8, opening));
-      for (const std::size_t n : counts) {
-        std::size_t mcl_ok = 0, door_ok = 0;
-        for (std::uint64_t r = 0; r < runs; ++r) {
-          const auto [a, b] = global_run(scene.world, grid, doors, n, distance, 100 + r);
-          mcl_ok += a.success ? 1 : 0;
-          door_ok += b.success ? 1 : 0;
-          std::cout << "  run " << r << ": MCL " << fixed(a.error_m, 2) << " m "
-                    << fixed(a.error_rad, 2) << " rad " << a.particles << " particles; door-aware "
-                    << fixed(b.error_m, 2) << " m " << fixed(b.error_rad, 2) << " rad "
-                    << b.particles << " particles\n"
-                    << std::flush;
-        }
-        std::cout << "global localization, doors " << (opening == 0 ? "closed" : "30 deg open")
-                  << ", " << n << " particles: MCL " << mcl_ok << "/" << runs << ", door-aware "
-                  << door_ok << "/" << runs << "\n"
-                  << std::flush;
-        json += std::string(json.empty() ? "" : ", ") + "\"" +
-                (opening == 0 ? "closed_" : "partially_open_") + std::to_string(n) + "\": [" +
-                std::to_string(mcl_ok) + ", " + std::to_string(door_ok) + "]";
-      }
-    }
-    std::cout << "{\"runs\": " << runs << ", \"distance_m\": " << fixed(distance, 1)
-              << ", \"successes_mcl_door_mcl\": {" << json << "}}\n";
-    return 0;
-  }
+  // 1-2. Mapping with known poses while the doors change between passes; the doors.
+  if (global) return run_global(argc, argv);
+  const CorridorMap map = map_corridor(false, seed, true);
+  const OccupancyGrid& grid = map.grid;
+  const std::vector<DoorModel>& doors = map.doors;
 
   // 3. Localization with both filters for three door states.
   struct State {
@@ -367,7 +402,7 @@ int main(int argc, char** argv) {
   svg.save("doors_out/doors.svg");
   std::cout << "wrote doors_out/doors.svg\n";
 
-  std::cout << "{\"doors_true\": " << true_doors.size() << ", \"doors_detected\": " << doors.size()
+  std::cout << "{\"doors_true\": " << map.true_doors << ", \"doors_detected\": " << doors.size()
             << ", \"mcl_mean_err_m\": {" << mcl_json << "}, \"door_mcl_mean_err_m\": {" << door_json
             << "}}\n";
   return 0;

@@ -11,7 +11,7 @@
 //     into obstacle points by the floor classification and fed into the obstacle map.
 // The simulator counts contacts (a step that would make the footprint touch something is refused,
 // like a bumper hit; the robot then backs off, turns away and carries on). With 2D perception the
-// robot runs into the objects again and again (4 contacts with 3 objects in 45 s); with 3D
+// robot runs into the objects again and again (3 contacts with 3 objects in 45 s); with 3D
 // perception it sees them and turns away without a contact. Neither run finds the exit in 45 s:
 // the behaviours wander, as the paper notes.
 //

@@ -131,6 +131,12 @@ TEST_CASE("door mcl: partially open doors", "[localization][doors][sim]") {
                                                << c.door_mean << " m (max " << c.door_max << " m)");
   CHECK(c.door_mean < 0.05);
   CHECK(c.door_max < 0.2);
+  // The doors' angles are measured (Kalman update from the scan's segments, §IV.3): 30 deg open is
+  // 60 deg from the south doors' fully open reference and 30 deg from the north doors' closed
+  // one. Doors passed early have since diffused by sigma_d per update but keep their mean.
+  for (std::size_t k = 0; k < 8; ++k)
+    CHECK(c.door_angles[k] ==
+          Approx(k < 4 ? half_pi - deg_to_rad(30.0) : deg_to_rad(30.0)).margin(deg_to_rad(10.0)));
 }
 
 TEST_CASE("door mcl: the particle count adapts to the pose uncertainty (KLD)",
@@ -161,6 +167,137 @@ TEST_CASE("door mcl: the particle count adapts to the pose uncertainty (KLD)",
   mcl.initialize_uniform(grid, 4000, rng);
   mcl.update(still, DoorAwareObservation{}, rng);
   CHECK(mcl.particle_count() == 4000);
+}
+
+TEST_CASE("door mcl: the door term of the sensor model is Eq. (6) to first order",
+          "[localization][doors]") {
+  // One door hinged at (2, 0), leaf 1 m, reference angle 0 (along +x), in an empty grid far
+  // from any occupied cell: the static map's term is the field's constant (distance clamped).
+  OccupancyGrid grid({-5, -5}, 200, 200);
+  grid.set_log_odds({0, 0}, 5.0);  // one occupied cell in a corner, 7 m away
+  DoorModel d;
+  d.hinge = {2, 0};
+  d.leaf_length = 1.0;
+  d.opening_max = half_pi;
+  const std::vector<DoorModel> doors{d};
+  DoorAwareMclParams p;
+  const DoorAwareMcl mcl(grid, doors, p);
+  const LikelihoodFieldParams& f = p.field;
+  const double s2 = f.sigma_hit * f.sigma_hit;
+  const auto door_term = [&](double dist, double t, double var_angle) {
+    const double var = s2 + t * t * var_angle;
+    return std::log(f.z_hit * std::exp(-0.5 * dist * dist / var) /
+                        std::sqrt(2 * std::numbers::pi * var) +
+                    f.z_rand / f.range_max);
+  };
+  DoorAwareState x;
+  x.doors[0] = {deg_to_rad(30.0), 0.01};
+  const Point2d u(std::cos(deg_to_rad(30.0)), std::sin(deg_to_rad(30.0)));
+  const Point2d n(-u.y(), u.x());
+  // On the leaf at 0.6 m from the hinge, and 0.1 m beside it: the distance moves by t per radian.
+  CHECK(mcl.end_point_log_likelihood(d.hinge + 0.6 * u, x) == Approx(door_term(0, 0.6, 0.01)));
+  CHECK(mcl.end_point_log_likelihood(d.hinge + 0.6 * u + 0.1 * n, x) ==
+        Approx(door_term(0.1, 0.6, 0.01)));
+  // A larger angle variance flattens the term the farther out along the leaf.
+  x.doors[0].variance = 0.1;
+  CHECK(mcl.end_point_log_likelihood(d.hinge + 0.9 * u, x) == Approx(door_term(0, 0.9, 0.1)));
+  // Beyond the leaf's reach the beam is associated with the static map.
+  const Point2d far = d.hinge + Point2d(0, 3);
+  CHECK(mcl.end_point_log_likelihood(far, x) == Approx(mcl.field().log_likelihood_at(far)));
+  // Maximum-likelihood association: near the leaf the door term wins over the empty map.
+  CHECK(mcl.end_point_log_likelihood(d.hinge + 0.6 * u, x) >
+        mcl.field().log_likelihood_at(d.hinge + 0.6 * u));
+}
+
+TEST_CASE(
+    "door mcl: door states start uniform over the range, diffuse by sigma_d, and the run "
+    "is deterministic for a seed",
+    "[localization][doors]") {
+  OccupancyGrid grid({-5, -5}, 200, 200);
+  DoorModel d;
+  d.hinge = {2, 0};
+  d.leaf_length = 0.9;
+  d.opening_max = deg_to_rad(60.0);
+  const std::vector<DoorModel> doors{d, d};
+  DoorAwareMclParams p;
+  p.sampling.adapt_particle_count = false;
+  DoorAwareMcl a(grid, doors, p), b(grid, doors, p);
+  std::mt19937_64 ra(9), rb(9);
+  a.initialize_gaussian({1, 1, 0}, {0.1, 0.1, 0.05}, 200, ra);
+  b.initialize_gaussian({1, 1, 0}, {0.1, 0.1, 0.05}, 200, rb);
+  // Uniform over [0, 60 deg]: mean 30 deg, variance range^2 / 12 in every particle.
+  const double range = deg_to_rad(60.0);
+  CHECK(a.door_estimate(1).mean == Approx(range / 2));
+  CHECK(a.door_estimate(1).variance == Approx(range * range / 12));
+  // Updates without any segment: no Kalman update, the variance grows by sigma_d^2 per update.
+  const OdometryReading u{{1, 1, 0}, {1.1, 1, 0}};
+  for (int k = 0; k < 3; ++k) {
+    a.update(u, DoorAwareObservation{}, ra);
+    b.update(u, DoorAwareObservation{}, rb);
+  }
+  CHECK(a.door_estimate(0).mean == Approx(range / 2));
+  CHECK(a.door_estimate(0).variance == Approx(range * range / 12 + 3 * p.sigma_d * p.sigma_d));
+  // The same seed gives the same particles.
+  REQUIRE(a.particle_count() == b.particle_count());
+  for (std::size_t i = 0; i < a.particle_count(); ++i) {
+    CHECK(a.filter().particles()[i].state.pose.x == b.filter().particles()[i].state.pose.x);
+    CHECK(a.filter().particles()[i].state.pose.theta == b.filter().particles()[i].state.pose.theta);
+  }
+}
+
+TEST_CASE("door mcl: scan segments measure the door angles (Kalman update, §IV.3)",
+          "[localization][doors]") {
+  // One door hinged at the origin, leaf 0.9 m, reference angle 0, observed range [0, 90 deg]. The
+  // robot stands at the origin of the map frame without moving (no motion noise), so the
+  // segments of the observation are in the map frame.
+  OccupancyGrid grid({-5, -5}, 200, 200);
+  DoorModel d;
+  d.leaf_length = 0.9;
+  d.opening_max = half_pi;
+  const std::vector<DoorModel> doors{d};
+  DoorAwareMclParams p;
+  p.sampling.adapt_particle_count = false;
+  const double r_var = p.angle_sigma * p.angle_sigma, q_var = p.sigma_d * p.sigma_d;
+  const auto leaf_at = [&](double angle, double from, double to) {
+    const Point2d u(std::cos(angle), std::sin(angle));
+    return std::pair<Point2d, Point2d>(from * u, to * u);
+  };
+  const OdometryReading still{{0, 0, 0}, {0, 0, 0}};
+  const auto one_update = [&](const std::pair<Point2d, Point2d>& segment) {
+    DoorAwareMcl mcl(grid, doors, p);
+    std::mt19937_64 rng(1);
+    mcl.initialize_gaussian({0, 0, 0}, {0, 0, 0}, 10, rng);
+    DoorAwareObservation z;
+    z.segments.push_back(segment);
+    const DoorAngleEstimate before = mcl.door_estimate(0);
+    mcl.update(still, z, rng);
+    return std::pair(before, mcl.door_estimate(0));
+  };
+  const auto kalman = [&](const DoorAngleEstimate& e, double measured) {
+    const double prior = e.variance + q_var, gain = prior / (prior + r_var);
+    return DoorAngleEstimate{e.mean + gain * (measured - e.mean), (1 - gain) * prior};
+  };
+  SECTION("a segment from near the hinge with the leaf's length") {
+    const auto [before, after] = one_update(leaf_at(deg_to_rad(20.0), 0.1, 0.9));
+    const DoorAngleEstimate expected = kalman(before, deg_to_rad(20.0));
+    CHECK(after.mean == Approx(expected.mean));
+    CHECK(after.variance == Approx(expected.variance));
+  }
+  SECTION("a door flush with its wall: a longer segment over the leaf through the hinge") {
+    // The wall continues on both sides of the closed leaf: one segment from -1 m to 2 m.
+    const auto [before, after] = one_update({Point2d(-1, 0), Point2d(2, 0)});
+    const DoorAngleEstimate expected = kalman(before, 0.0);
+    CHECK(after.mean == Approx(expected.mean));
+  }
+  SECTION("too short, away from the hinge, or outside the opening range: no update") {
+    for (const auto& segment : {leaf_at(deg_to_rad(20.0), 0.1, 0.4),
+                                std::pair<Point2d, Point2d>(Point2d(0.5, 0.5), Point2d(1.4, 0.5)),
+                                leaf_at(deg_to_rad(-60.0), 0.1, 0.9)}) {
+      const auto [before, after] = one_update(segment);
+      CHECK(after.mean == Approx(before.mean));
+      CHECK(after.variance == Approx(before.variance + q_var));
+    }
+  }
 }
 
 TEST_CASE("door mcl: bad arguments", "[localization][doors]") {

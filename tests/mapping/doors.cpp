@@ -95,6 +95,7 @@ TEST_CASE("doors: leaves rotating about a common hinge make a door", "[mapping][
     CHECK(b.doors().empty());
     DoorDetector c;
     c.add_leaf(leaf(hinge, 0.0, 0.4, 0.0));  // shorter than lambda_min = 0.6: not kept
+    c.add_leaf(leaf(hinge, 0.5, 1.4, 0.0));  // longer than lambda_max = 1.2: not kept
     CHECK(c.potential_leaves().empty());
     DoorDetector e;
     e.add_leaf(leaf(hinge, deg_to_rad(100.0), 0.9, 0.1));

@@ -93,6 +93,14 @@ TEST_CASE("office corridor: door states decide what a beam sees", "[sim][worlds]
   CHECK_THROWS_WITH(
       office_corridor({1.0}),
       "rangenav: office_corridor: argument 'door_openings.size()' = 1 must be 0 or 8");
+  // The copier alcove: the north wall is 0.5 m farther back at x in [8.4, 9.6] only, so the half
+  // turn about (10, 1) no longer maps the corridor onto itself.
+  const Scene a = office_corridor({}, true);
+  const RayHit in_alcove = a.world.cast_ray_2d({9.0, 1.0}, {0, 1}, 1.0, 20);
+  CHECK(a.object_of({in_alcove.kind, in_alcove.index})->name == "copier_alcove");
+  CHECK(in_alcove.range == Approx(1.5));
+  CHECK(a.world.cast_ray_2d({11.0, 1.0}, {0, -1}, 1.0, 20).range == Approx(1.0));  // its image
+  CHECK(s.world.cast_ray_2d({9.0, 1.0}, {0, 1}, 1.0, 20).range == Approx(1.0));
 }
 
 TEST_CASE("kitchen: rays hit the true planes", "[sim][worlds]") {

@@ -322,7 +322,6 @@ class VirtualMap {
       bins_[i] = bin_type{d * std::cos(b), d * std::sin(b), Scalar(0), d, b, 0, true};
     }
     dummies_ = bins_;
-    scratch_ = bins_;
     refresh();
   }
 
@@ -393,12 +392,12 @@ class VirtualMap {
     const Scalar max_range = params_.max_range;
     const std::uint32_t max_age = params_.max_age;
     const Scalar blind_range = params_.blind_range;
-    // scratch_ holds only dummies here; each bin read is reset to its dummy on the way, so the
-    // buffers swap roles without a refill of all N bins.
+    // Refilling all N bins with dummies in one block copy costs fewer stores than resetting each
+    // bin read (48 bytes each) and measured faster.
+    std::copy(dummies_.begin(), dummies_.end(), scratch_.begin());
     std::size_t moved = 0, merged = 0;
     for (const std::uint32_t i : valid_indices_) {
-      const bin_type b = bins_[i];
-      bins_[i] = dummies_[i];
+      const bin_type& b = bins_[i];
       // Would exceed max_age with this transformation (step 2), unless the sensor cannot see it.
       if (b.age >= max_age && !(b.range < blind_range)) {
         ++stats.aged_out;

@@ -303,7 +303,12 @@ inline constexpr std::size_t office_corridor_door_count = 8;
 /// 5 m wide with a 0.9 m door centred at x = 2.5 + 5 k. door_openings (rad, >= 0 opens into the
 /// office; empty = all closed) sets the 8 doors in the order of office_corridor_door_count.
 /// Objects: door_s0..door_s3, door_n0..door_n3. start = (1, 1, 0); tour along the corridor.
-[[nodiscard]] inline Scene office_corridor(const std::vector<double>& door_openings = {}) {
+/// With closed doors this corridor is symmetric under a half turn about (10, 1): a robot in it
+/// cannot tell x from 20 - x. `copier_alcove` adds what a real office corridor has and breaks
+/// that symmetry: a 1.2 m wide, 0.5 m deep alcove in the north wall at x in [8.4, 9.6] (object
+/// "copier_alcove", taken from the north office between the doors n1 and n2).
+[[nodiscard]] inline Scene office_corridor(const std::vector<double>& door_openings = {},
+                                           bool copier_alcove = false) {
   using namespace detail_worlds;
   if (!door_openings.empty() && door_openings.size() != office_corridor_door_count)
     detail::throw_invalid_argument("office_corridor", "door_openings.size()", door_openings.size(),
@@ -319,8 +324,12 @@ inline constexpr std::size_t office_corridor_door_count = 8;
   for (int side = 0; side < 2; ++side) {
     const double y = side == 0 ? 0.0 : width;
     const double y_far = side == 0 ? -depth : width + depth;
-    wall_with_openings(w, {0, y}, {length, y},
-                       {{2.05, 2.95}, {7.05, 7.95}, {12.05, 12.95}, {17.05, 17.95}});
+    if (side == 1 && copier_alcove)
+      wall_with_openings(w, {0, y}, {length, y},
+                         {{2.05, 2.95}, {7.05, 7.95}, {8.4, 9.6}, {12.05, 12.95}, {17.05, 17.95}});
+    else
+      wall_with_openings(w, {0, y}, {length, y},
+                         {{2.05, 2.95}, {7.05, 7.95}, {12.05, 12.95}, {17.05, 17.95}});
     w.add_wall({0, y_far}, {length, y_far});
     for (int k = 0; k <= 4; ++k)
       w.add_wall({5.0 * k, y}, {5.0 * k, y_far});
@@ -332,6 +341,16 @@ inline constexpr std::size_t office_corridor_door_count = 8;
       add_named_door(s, std::move(name),
                      {{2.5 + 5.0 * k - door / 2, y}, 0.0, door, side == 0 ? -open : open});
     }
+  }
+  if (copier_alcove) {
+    SceneObject alcove = make_object("copier_alcove", "alcove");
+    for (const auto& [a, b] : {std::pair<Point2d, Point2d>{{8.4, width}, {8.4, width + 0.5}},
+                               {{8.4, width + 0.5}, {9.6, width + 0.5}},
+                               {{9.6, width + 0.5}, {9.6, width}}})
+      alcove.parts.push_back({SurfaceKind::wall, u32(w.add_wall(a, b))});
+    alcove.min = {8.4, width, 0};
+    alcove.max = {9.6, width + 0.5, 2.5};
+    s.objects.push_back(std::move(alcove));
   }
   w.add_wall({0, 0}, {0, width});
   w.add_wall({length, 0}, {length, width});
