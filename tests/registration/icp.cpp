@@ -13,6 +13,7 @@
 #include "rangenav/registration/frustum.hpp"
 #include "rangenav/registration/icp.hpp"
 #include "rangenav/registration/point_to_line_solver.hpp"
+#include "rangenav/registration/point_to_plane_solver.hpp"
 #include "rangenav/registration/point_to_point_solver.hpp"
 #include "rangenav/registration/rejectors.hpp"
 #include "rangenav/search/kd_tree.hpp"
@@ -37,6 +38,8 @@ static_assert(TransformSolver<PointToPointSolver<2, double>, 2, double>);
 static_assert(TransformSolver<PointToPointSolver<3, float>, 3, float>);
 static_assert(TransformSolver<PointToLineSolver<double>, 2, double>);
 static_assert(TransformSolver<PointToLineSolver<float>, 2, float>);
+static_assert(TransformSolver<PointToPlaneSolver<double>, 3, double>);
+static_assert(TransformSolver<PointToPlaneSolver<float>, 3, float>);
 
 namespace {
 
@@ -170,6 +173,144 @@ TEST_CASE("3D SVD solver recovers rotations and never returns a reflection", "[r
       CHECK(transform_error<3>(*noisy, truth).second < 0.01);
     }
   }
+}
+
+namespace {
+
+/// Points on axis-aligned faces with their unit normals: a 6 x 4 x 3 m room (or only its floor
+/// and one wall, x = 3, facing -x: a planar front that fills the view) and a 1 x 0.7 x 0.8 m
+/// box on the floor, sampled uniformly.
+struct FacedCloud {
+  std::vector<Eigen::Vector3d> points, normals;
+};
+
+FacedCloud faces_3d(std::mt19937& rng, double density, bool front_only) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  FacedCloud out;
+  const auto face = [&](Eigen::Vector3d lo, Eigen::Vector3d hi, int axis, double sign) {
+    Eigen::Vector3d size = hi - lo;
+    size[axis] = 1;
+    const auto n = static_cast<std::size_t>(density * size.prod());
+    for (std::size_t i = 0; i < n; ++i) {
+      Eigen::Vector3d p;
+      for (int k = 0; k < 3; ++k)
+        p[k] = lo[k] + (hi[k] - lo[k]) * u(rng);
+      out.points.push_back(p);
+      out.normals.push_back(sign * Eigen::Vector3d::Unit(axis));
+    }
+  };
+  face({-3, -2, 0}, {3, 2, 0}, 2, 1);  // floor
+  face({3, -2, 0}, {3, 2, 3}, 0, -1);  // the front
+  if (!front_only) {
+    face({-3, -2, 3}, {3, 2, 3}, 2, -1);
+    face({-3, -2, 0}, {-3, 2, 3}, 0, 1);
+    face({-3, -2, 0}, {3, -2, 3}, 1, 1);
+    face({-3, 2, 0}, {3, 2, 3}, 1, -1);
+  }
+  // The box: its +y / -y sides and top are what pins the motion along the front.
+  face({1.5, 0.3, 0.8}, {2.5, 1.0, 0.8}, 2, 1);
+  face({1.5, 0.3, 0}, {2.5, 0.3, 0.8}, 1, -1);
+  face({1.5, 1.0, 0}, {2.5, 1.0, 0.8}, 1, 1);
+  face({1.5, 0.3, 0}, {1.5, 1.0, 0.8}, 0, -1);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("point-to-plane solver: exact on planes, indifferent to sliding within them",
+          "[registration]") {
+  // Data points on the faces of a room seen through a known transform, each paired with a model
+  // point up to 0.2 m away WITHIN its face (what a sparse map gives). Point-to-point is biased
+  // by the sliding; point-to-plane (Low 2004) recovers the transform, from the point-to-point
+  // start or from a current transform 0.2 m / 0.15 rad off.
+  std::mt19937 rng(4);
+  const FacedCloud room = faces_3d(rng, 4.0, false);
+  std::uniform_real_distribution<double> along(-0.2, 0.2);
+  const Transform3d truth = make_transform3(0.3, -0.2, 0.1, 0.05, -0.1, 0.6);
+  const Transform3d to_data = truth.inverse(Eigen::Isometry);
+  std::vector<Correspondence<3, double>> pairs;
+  std::vector<Eigen::Vector3d> normals;
+  for (std::size_t i = 0; i < room.points.size(); ++i) {
+    const Eigen::Vector3d& n = room.normals[i];
+    Eigen::Vector3d slide(along(rng), along(rng), along(rng));
+    slide -= n * n.dot(slide);
+    const auto index = static_cast<std::uint32_t>(i);
+    normals.push_back(i % 7 == 6 ? Eigen::Vector3d::Zero() : n);  // some without a plane
+    pairs.push_back({to_data * room.points[i], room.points[i] + slide, 0.0, index, index});
+  }
+  std::vector<Correspondence<3, double>> planar;
+  for (const auto& c : pairs)
+    if (!normals[c.model_index].isZero(0)) planar.push_back(c);
+  PointToPlaneSolver<double> solver;
+  solver.model_normals = normals;
+  const auto from_p2p = solver.solve(planar);
+  REQUIRE(from_p2p);
+  CHECK(transform_error<3>(*from_p2p, truth).first < 1e-6);
+  CHECK(transform_error<3>(*from_p2p, truth).second < 1e-6);
+  const Transform3d current = make_transform3(0.1, 0.0, 0.2, 0.0, 0.0, 0.45);
+  const auto from_current = solver.solve(planar, current);
+  REQUIRE(from_current);
+  CHECK(transform_error<3>(*from_current, truth).first < 1e-6);
+  CHECK(transform_error<3>(*from_current, truth).second < 1e-6);
+  const auto p2p = PointToPointSolver<3, double>{}.solve(planar);
+  REQUIRE(p2p);
+  CHECK(transform_error<3>(*p2p, truth).first > 1e-3);
+  // The pairs without a normal are left out: the same answer with them.
+  const auto mixed = solver.solve(pairs, current);
+  REQUIRE(mixed);
+  CHECK(mixed->isApprox(*from_current, 1e-9));
+  // No normals at all: the point-to-point solution; too few pairs: none.
+  PointToPlaneSolver<double> no_normals;
+  const auto same = no_normals.solve(planar, current);
+  REQUIRE(same);
+  CHECK(same->isApprox(*p2p));
+  CHECK_FALSE(solver.solve(std::span(planar).first(2)).has_value());
+  CHECK_FALSE(solver.solve(std::span(planar).first(2), current).has_value());
+  // Only the floor: x, y and the yaw are unconstrained. From a start off in all six directions,
+  // z, roll and pitch come out right and the damping leaves the rest where it was: the floor
+  // points' centroid keeps its x and y.
+  std::vector<Correspondence<3, double>> floor;
+  for (const auto& c : planar)
+    if (normals[c.model_index].z() > 0.5 && c.model.z() < 0.01) floor.push_back(c);
+  REQUIRE(floor.size() > 50);
+  const Transform3d start = make_transform3(0.2, -0.1, 0.05, 0.03, -0.02, 0.1) * truth;
+  const auto on_floor = solver.solve(floor, start);
+  REQUIRE(on_floor);
+  Eigen::Vector3d before = Eigen::Vector3d::Zero(), after = Eigen::Vector3d::Zero();
+  for (const auto& c : floor) {
+    CHECK(std::abs((*on_floor * c.data).z()) < 1e-6);
+    before += start * c.data;
+    after += *on_floor * c.data;
+  }
+  CHECK((after - before).head<2>().norm() / static_cast<double>(floor.size()) < 1e-6);
+}
+
+TEST_CASE("point-to-plane ICP does not slide along a planar front that fills the view",
+          "[registration]") {
+  // A floor, a wall facing the sensor (6 x 3 m) and a box: the model is a sparse sample (what a
+  // point map keeps), the data a denser, different sample seen through the true transform. The
+  // only features along the wall are the box's sides. Ground truth: the transform of the data.
+  std::mt19937 rng(5);
+  const FacedCloud model = faces_3d(rng, 300.0, true);
+  const FacedCloud scene = faces_3d(rng, 600.0, true);
+  const Transform3d truth = make_transform3(0.04, -0.05, 0.01, 0.0, 0.01, 0.05);
+  std::vector<Eigen::Vector3d> data;
+  for (const auto& p : scene.points)
+    data.push_back(truth.inverse(Eigen::Isometry) * p);
+  const KdTree<3, double> tree(model.points);
+  BasicIcp<3, double, PointToPlaneSolver<double>, DecayingDistanceRejector<double>> icp;
+  icp.solver.model_normals = model.normals;
+  icp.params.max_iterations = 50;
+  icp.rejector<DecayingDistanceRejector<double>>() = {0.3, 0.05, 0.7};
+  const auto r = icp.align(tree, data, Transform3d::Identity());
+  CHECK(r.reason == IcpTermination::converged);
+  const auto [et, er] = transform_error<3>(r.transform, truth);
+  CHECK(et < 0.005);
+  CHECK(er < 0.002);
+  // Without normals the same ICP is point-to-point and lands farther from the truth.
+  icp.solver.model_normals = {};
+  const auto p2p = icp.align(tree, data, Transform3d::Identity());
+  CHECK(transform_error<3>(p2p.transform, truth).first > et);
 }
 
 TEST_CASE("solvers refuse identical, collinear and too few points", "[registration]") {

@@ -213,7 +213,13 @@ class BasicIcp {
         result.reason = IcpTermination::too_few_pairs;
         break;
       }
-      const std::optional<transform_type> next = solver.solve(std::span(pairs_));
+      // A solver that refines from the current transform (PointToPlaneSolver) gets it.
+      const std::span<const correspondence_type> kept(pairs_);
+      std::optional<transform_type> next;
+      if constexpr (requires { solver.solve(kept, transform); })
+        next = solver.solve(kept, transform);
+      else
+        next = solver.solve(kept);
       if (!next) {
         result.reason = IcpTermination::degenerate;
         break;
