@@ -2,6 +2,7 @@
 // against the simulator's true poses and planes.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "rangenav/core/error.hpp"
+#include "rangenav/geometry/voxel_grid.hpp"
 #include "rangenav/mapping/geometric_mapper.hpp"
 #include "rangenav/scan/depth_image.hpp"
 #include "rangenav/sim/sensors.hpp"
@@ -64,12 +66,25 @@ TEST_CASE("GeometricMapper extracts the kitchen's true planes from an aligned fr
   const auto cloud = to_organized_cloud(camera.capture(scene.world, robot, rng));
   const Transform3d truth = sim::robot_transform(robot) * camera.camera_to_robot();
 
-  GeometricMapper mapper(kitchen_params());
+  // The organised frame is clustered over image neighbours by default; the kd-tree's radius
+  // queries (organized_clustering false) must find the same true planes.
+  const bool organized = GENERATE(true, false);
+  CAPTURE(organized);
+  auto params = kitchen_params();
+  params.organized_clustering = organized;
+  GeometricMapper mapper(params);
   const GeometricFrameReport report = mapper.process(cloud, truth, rng);
   CHECK(report.key_frame);
   CHECK(report.registered);
   CHECK(!report.icp);  // the first frame starts the map
   CHECK(mapper.point_map().size() > 500);
+  // The point map holds the voxel-filtered frame (point_map_downsampled): one point per voxel.
+  CHECK(mapper.point_map().size() == voxel_downsample(cloud, params.voxel_leaf).size());
+  // Every finite pixel is offered to the extraction (the full-resolution frame).
+  CHECK(report.extraction_points ==
+        static_cast<std::size_t>(std::count_if(cloud.points.begin(), cloud.points.end(),
+                                               [](const Point3d& q) { return q.allFinite(); })));
+  CHECK(report.clusters > 0);
   REQUIRE(!report.planes.empty());
   // The big surfaces are found, each once, on their true plane with a small residual.
   std::map<std::string, int> found;
