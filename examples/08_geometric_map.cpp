@@ -30,13 +30,17 @@
 // table scene (pcl_test/table_scene_mug_stereo_textured.pcd, one frame without pose), and prints
 // the planes found and what merging made of them.
 //
-// Usage: 08_geometric_map [--full] [--frames N] [--seed S] [--kd-clustering] [--full-res-point-map]
+// Usage: 08_geometric_map [--full] [--frames N] [--cycles C] [--seed S] [--kd-clustering]
+// [--full-res-point-map]
 // [--svg map.svg] [--ply map.ply]
 //   --full   640 x 480 frames, planes extracted at full resolution (the organised path), and the
 //            whole back-and-forth sequence (120 frames); by default 160 x 120 frames and a
 //            sequence of 10 frames, so that the example runs in a few seconds.
-//   --frames N   frames in the sequence (one back-and-forth cycle; about 0.4 N key frames for
-//            large N, as a key frame needs 0.15 m or 0.15 rad of motion).
+//   --frames N   frames in the sequence (default 10, 120 with --full). A key frame needs 0.15 m or
+//            0.15 rad of motion, so one cycle gives at most about 30 key frames (28-34 at N =
+//            40-120).
+//   --cycles C   back-and-forth cycles in those frames (default 1; e.g. --frames 240 --cycles 2
+//            for about 60 key frames, the paper used 52).
 //   --seed S   seed of the sensor noise and the odometry drift (default 42).
 //   --kd-clustering   cluster with kd-tree radius queries instead of image neighbours, and
 //   --full-res-point-map   key frames join the point map at full resolution instead of voxel-
@@ -253,7 +257,7 @@ std::string real_data(const std::filesystem::path& dir) {
 
 int main(int argc, char** argv) {
   bool full = false;
-  int frames = 0;
+  int frames = 0, cycles = 1;
   unsigned seed = 42;
   bool kd_clustering = false, full_res_point_map = false;
   std::filesystem::path svg_path = "08_geometric_map.svg", ply_path = "08_geometric_map.ply";
@@ -263,6 +267,8 @@ int main(int argc, char** argv) {
       full = true;
     else if (a == "--frames" && i + 1 < argc && std::atoi(argv[i + 1]) > 0)
       frames = std::atoi(argv[++i]);
+    else if (a == "--cycles" && i + 1 < argc && std::atoi(argv[i + 1]) > 0)
+      cycles = std::atoi(argv[++i]);
     else if (a == "--seed" && i + 1 < argc)
       seed = static_cast<unsigned>(std::strtoul(argv[++i], nullptr, 10));
     else if (a == "--kd-clustering")
@@ -274,9 +280,10 @@ int main(int argc, char** argv) {
     else if (a == "--ply" && i + 1 < argc)
       ply_path = argv[++i];
     else {
-      std::fprintf(stderr,
-                   "usage: 08_geometric_map [--full] [--frames N] [--seed S] [--kd-clustering] "
-                   "[--full-res-point-map] [--svg FILE] [--ply FILE]\n");
+      std::fprintf(
+          stderr,
+          "usage: 08_geometric_map [--full] [--frames N] [--cycles C] [--seed S] [--kd-clustering] "
+          "[--full-res-point-map] [--svg FILE] [--ply FILE]\n");
       return 2;
     }
   }
@@ -331,7 +338,7 @@ int main(int argc, char** argv) {
     double cpu = 0;
     Pose2d drift{0, 0, 0};
     for (int k = 0; k < frames; ++k) {
-      const double phase = 2 * std::numbers::pi * k / frames;
+      const double phase = 2 * std::numbers::pi * cycles * k / frames;
       const Pose2d robot{3.9 + 0.2 * std::sin(2 * phase), 2.0 + 1.0 * std::sin(phase),
                          std::numbers::pi + 0.4 * std::sin(3 * phase)};
       drift = {drift.x + 0.005 * odo(rng), drift.y + 0.005 * odo(rng),
