@@ -20,13 +20,16 @@
 // with the likelihood field's sigma_hit 0.2 m and 0.8 m (defaults: 10 runs, 12 m, 1k 5k 10k 50k
 // particles).
 //
+// `--irregular` (before the other arguments) moves the doors off their even 5 m spacing (south
+// doors centred at x = 1.4, 6.1, 13.6, 17.9, north ones at 3.3, 6.9, 11.2, 16.4), as in a real
+// corridor, where one office does not look like the next.
 // `--into-corridor` (before the other arguments) swings the doors into the corridor instead of
 // into the offices, as the doors of the paper's corridor did (its robot had to drive "two tight
 // curves" around open doors). The mapping passes are the same (open 90 deg, closed, open 45 deg;
 // the mapping poses are given, the robot does not drive past the doors) and the lesson localizes
 // with the doors closed and 30 deg open (wider openings block the robot's way).
 //
-// Run it as `07_doors [--into-corridor] [seed]`.
+// Run it as `07_doors [--irregular] [--into-corridor] [seed]`.
 
 #include <algorithm>
 #include <cmath>
@@ -248,18 +251,21 @@ struct CorridorMap {
   std::size_t true_doors{0};
 };
 
-/// Door openings of office_corridor() for a signed swing: +1 into the offices, -1 into the
-/// corridor.
-std::vector<double> all_doors(double opening, int swing) {
-  return std::vector<double>(8, swing * opening);
+/// Where the doors are and which way they swing: `swing` +1 into the offices, -1 into the
+/// corridor; `centers` empty: evenly spaced (office_corridor()'s door_centers).
+struct Layout {
+  int swing{1};
+  std::vector<double> centers;
+};
+
+/// The corridor with every door at `opening` (rad, into the side `layout.swing` says).
+sim::Scene corridor(double opening, bool alcove, const Layout& layout) {
+  return sim::office_corridor(std::vector<double>(8, layout.swing * opening), alcove,
+                              layout.centers);
 }
 
-CorridorMap map_corridor(bool alcove, std::uint64_t seed, bool verbose, int swing) {
-  const std::vector<std::vector<double>> passes =
-      swing > 0 ? std::vector<std::vector<double>>{all_doors(90 * deg, swing), all_doors(0, swing),
-                                                   all_doors(45 * deg, swing)}
-                : std::vector<std::vector<double>>{all_doors(90 * deg, swing), all_doors(0, swing),
-                                                   all_doors(45 * deg, swing)};
+CorridorMap map_corridor(bool alcove, std::uint64_t seed, bool verbose, const Layout& layout) {
+  const std::vector<double> passes = {90 * deg, 0.0, 45 * deg};
   CorridorMap m{OccupancyGrid::covering({0, -4}, {20, 6}, 0.5), {}, 0};
   DoorDetector detector;
   const sim::LaserScanner2D mapping_laser;  // SICK S300: 270 deg, 541 beams
@@ -268,7 +274,7 @@ CorridorMap map_corridor(bool alcove, std::uint64_t seed, bool verbose, int swin
   std::size_t dynamic = 0, vanished = 0;
   std::vector<sim::Door> true_doors;
   for (std::size_t pass = 0; pass < passes.size(); ++pass) {
-    const sim::Scene scene = sim::office_corridor(passes[pass], alcove);
+    const sim::Scene scene = corridor(passes[pass], alcove, layout);
     true_doors = scene.world.doors();
     for (int k = 0; k <= 94; ++k) {
       const bool east = pass % 2 == 0;
@@ -303,7 +309,7 @@ CorridorMap map_corridor(bool alcove, std::uint64_t seed, bool verbose, int swin
 /// filters (the paper's Fig. 8-9) in the plain (symmetric) corridor and in the corridor with its
 /// copier alcove, with the likelihood field's sigma_hit at the tracking default (0.2 m) and
 /// widened to 0.8 m, doors closed and 30 deg open. Slow: see benchmarks/README.md.
-int run_global(int argc, char** argv, int swing) {
+int run_global(int argc, char** argv, const Layout& layout) {
   const std::uint64_t runs = argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 10;
   const double distance = argc > 3 ? std::strtod(argv[3], nullptr) : 12.0;
   std::vector<std::size_t> counts;
@@ -312,12 +318,12 @@ int run_global(int argc, char** argv, int swing) {
   if (counts.empty()) counts = {1000, 5000, 10000, 50000};
   std::string json;
   for (const bool alcove : {false, true}) {
-    const CorridorMap map = map_corridor(alcove, 1, false, swing);
+    const CorridorMap map = map_corridor(alcove, 1, false, layout);
     std::cout << (alcove ? "corridor with the copier alcove" : "plain corridor") << ": "
               << map.doors.size() << " of " << map.true_doors << " doors detected\n";
     for (const double sigma_hit : {0.2, 0.8})
       for (const double opening : {0.0, 30 * deg}) {
-        const sim::Scene scene = sim::office_corridor(all_doors(opening, swing), alcove);
+        const sim::Scene scene = corridor(opening, alcove, layout);
         for (const std::size_t n : counts) {
           std::size_t mcl_ok = 0, door_ok = 0;
           for (std::uint64_t r = 0; r < runs; ++r) {
@@ -342,8 +348,9 @@ int run_global(int argc, char** argv, int swing) {
         }
       }
   }
-  std::cout << "{\"doors_swing_into\": \"" << (swing > 0 ? "offices" : "corridor")
-            << "\", \"runs\": " << runs << ", \"distance_m\": " << fixed(distance, 1)
+  std::cout << "{\"doors_swing_into\": \"" << (layout.swing > 0 ? "offices" : "corridor")
+            << "\", \"doors_irregular\": " << (layout.centers.empty() ? "false" : "true")
+            << ", \"runs\": " << runs << ", \"distance_m\": " << fixed(distance, 1)
             << ", \"successes_mcl_door_mcl\": {" << json << "}}\n";
   return 0;
 }
@@ -351,21 +358,28 @@ int run_global(int argc, char** argv, int swing) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // `--into-corridor`: doors swing into the corridor (+1: into the offices).
-  int swing = 1;
-  if (argc > 1 && std::string(argv[1]) == "--into-corridor") {
-    swing = -1;
-    --argc;
-    ++argv;
+  // `--irregular`: doors off their even spacing; `--into-corridor`: doors swing into the
+  // corridor.
+  Layout layout;
+  for (bool more = true; more && argc > 1;) {
+    const std::string flag = argv[1];
+    more = flag == "--irregular" || flag == "--into-corridor";
+    if (flag == "--irregular") layout.centers = {1.4, 6.1, 13.6, 17.9, 3.3, 6.9, 11.2, 16.4};
+    if (flag == "--into-corridor") layout.swing = -1;
+    if (more) {
+      --argc;
+      ++argv;
+    }
   }
+  const int swing = layout.swing;
   // `07_doors --global runs distance n1 n2 ...`: the global-localization success rates instead of
   // the default lesson (slow: see benchmarks/README.md).
   const bool global = argc > 1 && std::string(argv[1]) == "--global";
   const std::uint64_t seed = argc > 1 && !global ? std::strtoull(argv[1], nullptr, 10) : 1;
 
   // 1-2. Mapping with known poses while the doors change between passes; the doors.
-  if (global) return run_global(argc, argv, swing);
-  const CorridorMap map = map_corridor(false, seed, true, swing);
+  if (global) return run_global(argc, argv, layout);
+  const CorridorMap map = map_corridor(false, seed, true, layout);
   const OccupancyGrid& grid = map.grid;
   const std::vector<DoorModel>& doors = map.doors;
 
@@ -380,7 +394,7 @@ int main(int argc, char** argv) {
   std::vector<Pose2d> drawn_path;
   DoorAwareState drawn_states;  // door estimates of the partially open run, for Fig. 4 bottom
   for (const State& s : states) {
-    const sim::Scene scene = sim::office_corridor(all_doors(s.opening, swing));
+    const sim::Scene scene = corridor(s.opening, false, layout);
     const TrackingResult r = track(scene.world, grid, doors, seed);
     std::cout << "doors " << s.name << ": standard MCL error mean " << fixed(r.mcl.mean)
               << " m, max " << fixed(r.mcl.max) << " m; door-aware MCL mean "
@@ -422,8 +436,9 @@ int main(int argc, char** argv) {
            "estimated door states (doors 30 deg open)",
            14);
   std::filesystem::create_directories("doors_out");
-  const std::string svg_path =
-      swing > 0 ? "doors_out/doors.svg" : "doors_out/doors_into_corridor.svg";
+  const std::string svg_path = std::string("doors_out/doors") +
+                               (layout.centers.empty() ? "" : "_irregular") +
+                               (swing > 0 ? "" : "_into_corridor") + ".svg";
   svg.save(svg_path);
   std::cout << "wrote " << svg_path << "\n";
 
