@@ -282,7 +282,7 @@ CorridorMap map_corridor(bool alcove, std::uint64_t seed, bool verbose, const La
       m.grid.integrate(pose, mapping_laser.scan(scene.world, pose, rng), c);
       dynamic += c.dynamic_points.size();
       vanished += c.vanished_points.size();
-      detector.add(c);
+      detector.add(c, m.grid);
     }
   }
   m.doors = detector.doors();

@@ -69,7 +69,7 @@ DetectedMap detected_map(bool alcove) {
     for (int k = 0; k <= 94; ++k) {
       const Pose2d pose{east ? 0.6 + 0.2 * k : 19.4 - 0.2 * k, 1.0, east ? 0.0 : std::numbers::pi};
       m.grid.integrate(pose, laser.scan(scene.world, pose, rng), c);
-      detector.add(c);
+      detector.add(c, m.grid);
     }
   }
   m.doors = detector.doors();

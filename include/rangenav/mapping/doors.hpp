@@ -17,6 +17,9 @@
 //      rejected (office doors do not swing through). The common end point is taken where the two
 //      leaves' lines cross, within `hinge_tolerance` of an end of both: the cells beside a hinge
 //      are never transient (§III's neighbourhood test), so observed leaves stop short of it.
+//      Given the grid (add(c, grid)), the hinge must also be held by it: an occupied cell within
+//      `hinge_support_radius` (the door's frame), which rejects opposite leaves meeting tip to
+//      tip in the free corridor.
 // A door is its hinge position, leaf length, reference angle (global direction of the leaf at
 // the smallest observed opening) and observed opening range [0, opening_max]. remove_doors()
 // clears the cells the leaves sweep from the static grid, keeping the hinge cell occupied as the
@@ -52,6 +55,11 @@ struct DoorDetectionParams {
   double length_tolerance{0.2};  ///< leaves of one door differ at most this much (m)
   double min_opening_difference{deg_to_rad(20.0)};  ///< "clearly different" opening angles
   double max_opening{std::numbers::pi};             ///< doors rotating farther are rejected
+  /// With a grid (add(c, grid), detect(&grid)): a hinge needs an occupied cell of the static
+  /// grid this close (m); the door's frame holds it (§IV: "we represent the doors' hinge joints
+  /// both as occupied cells in the grid map"). Two leaves meeting tip to tip in free space
+  /// (opposite doors swung towards each other) are no door.
+  double hinge_support_radius{0.15};
 
   void validate(std::string_view where) const {
     detail::require_positive(where, "epsilon", epsilon);
@@ -66,6 +74,7 @@ struct DoorDetectionParams {
     detail::require_positive(where, "length_tolerance", length_tolerance);
     detail::require_positive(where, "min_opening_difference", min_opening_difference);
     detail::require_positive(where, "max_opening", max_opening);
+    detail::require_positive(where, "hinge_support_radius", hinge_support_radius);
   }
 };
 
@@ -229,6 +238,19 @@ class DoorDetector {
     detect();
     return found;
   }
+  /// add() whose door detection also requires every hinge to be held by the static `grid`
+  /// (DoorDetectionParams::hinge_support_radius); pass the grid the classification came from.
+  std::size_t add(const ScanClassification& c, const OccupancyGrid& grid) {
+    std::size_t found = 0;
+    for (const auto* set : {&c.dynamic_points, &c.vanished_points}) {
+      extract_lines(*set, lines_);
+      found += lines_.size();
+      for (const auto& line : lines_)
+        add_leaf(line);
+    }
+    detect(&grid);
+    return found;
+  }
 
   /// Step 3 for a line object: keeps it if its length is within [lambda_min, lambda_max].
   void add_leaf(const LineObject& line) {
@@ -250,8 +272,8 @@ class DoorDetector {
     leaves_.push_back(line);
   }
 
-  /// Step 4 over the whole set of potential leaves.
-  void detect() {
+  /// Step 4 over the whole set of potential leaves; with a `grid`, hinges must be held by it.
+  void detect(const OccupancyGrid* grid = nullptr) {
     doors_.clear();
     const double hinge_sq = params_.hinge_tolerance * params_.hinge_tolerance;
     used_.assign(leaves_.size(), 0);
@@ -270,6 +292,7 @@ class DoorDetector {
         return std::min((l.a - hinge).squaredNorm(), (l.b - hinge).squaredNorm());
       };
       if (near_end_sq(li) >= hinge_sq || near_end_sq(lj) >= hinge_sq) return false;
+      if (grid != nullptr && !held_by(*grid, hinge)) return false;
       return try_door(hinge, i, j);
     };
     for (std::size_t i = 0; i < leaves_.size(); ++i)
@@ -281,6 +304,21 @@ class DoorDetector {
   void remove_doors(OccupancyGrid& grid) const { rangenav::remove_doors(grid, doors_); }
 
  private:
+  /// An occupied cell of `grid` within hinge_support_radius of `hinge`.
+  [[nodiscard]] bool held_by(const OccupancyGrid& grid, const Point2d& hinge) const {
+    const double r = params_.hinge_support_radius;
+    const OccupancyGrid::Index lo = grid.cell_of(hinge - Point2d::Constant(r));
+    const OccupancyGrid::Index hi = grid.cell_of(hinge + Point2d::Constant(r));
+    for (int y = lo.y(); y <= hi.y(); ++y)
+      for (int x = lo.x(); x <= hi.x(); ++x) {
+        const OccupancyGrid::Index c(x, y);
+        if (grid.contains(c) && grid.is_occupied(c) &&
+            (grid.cell_center(c) - hinge).squaredNorm() <= r * r)
+          return true;
+      }
+    return false;
+  }
+
   /// Leaves i and j share `hinge`: a door if their lengths agree and their angles differ
   /// clearly; then every other leaf on that hinge widens the opening range.
   bool try_door(const Point2d& hinge, std::size_t i, std::size_t j) {
