@@ -28,6 +28,34 @@ TEST_CASE("doors: proximity clustering, Eq. (1)", "[mapping][doors]") {
   CHECK(proximity_clusters(std::vector<Point2d>{}, 0.1).empty());
   CHECK_THROWS_WITH(proximity_clusters(points, 0.0),
                     "rangenav: proximity_clusters: argument 'epsilon' = 0 must be finite and > 0");
+  // Against brute force: 400 random points in a 4 m square, linked when closer than 0.15 m
+  // (union of all close pairs by repeated relabelling), numbered by their first point.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 4.0);
+  std::vector<Point2d> cloud(400);
+  for (auto& p : cloud)
+    p = {u(rng), u(rng)};
+  std::vector<std::size_t> root(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    root[i] = i;
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+      for (std::size_t j = 0; j < cloud.size(); ++j)
+        if ((cloud[i] - cloud[j]).norm() < 0.15 && root[j] < root[i]) {
+          root[i] = root[j];
+          changed = true;
+        }
+  }
+  std::vector<std::size_t> expected(cloud.size()), number(cloud.size(), cloud.size());
+  std::size_t next = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (number[root[i]] == cloud.size()) number[root[i]] = next++;
+    expected[i] = number[root[i]];
+  }
+  REQUIRE(next > 20);  // many clusters, some of several points
+  REQUIRE(next < 350);
+  CHECK(proximity_clusters(cloud, 0.15) == expected);
 }
 
 TEST_CASE("doors: mean line segment and the angle-consistency test, Eq. (2)", "[mapping][doors]") {

@@ -90,6 +90,18 @@ TEST_CASE("office corridor: door states decide what a beam sees", "[sim][worlds]
   const Scene n = office_corridor(open);
   const Door& d = n.world.doors()[6];
   CHECK(d.leaf().center.y() > 2.0);
+  // Negative openings swing into the corridor: door_s1 at -30 deg, hinged at (7.05, 0), stops a
+  // beam along y = 0.2 where its leaf crosses it, 0.2 / tan(30 deg) past the hinge (the leaf's
+  // face 2 cm nearer, measured along the beam 0.02 / sin(30 deg)).
+  open.assign(office_corridor_door_count, 0.0);
+  open[1] = -std::numbers::pi / 6;
+  const Scene c = office_corridor(open);
+  const RayHit leaf = c.world.cast_ray_2d({5.5, 0.2}, {1, 0}, 1.0, 20);
+  CHECK(leaf.kind == SurfaceKind::door);
+  CHECK(leaf.range == Approx(7.05 + 0.2 / std::tan(std::numbers::pi / 6) - 0.02 / 0.5 - 5.5));
+  CHECK_THROWS_WITH(office_corridor(std::vector<double>(8, -4.0)),
+                    "rangenav: office_corridor: argument 'door_openings[i]' = -4 must be in "
+                    "[-pi, pi]");
   CHECK_THROWS_WITH(
       office_corridor({1.0}),
       "rangenav: office_corridor: argument 'door_openings.size()' = 1 must be 0 or 8");

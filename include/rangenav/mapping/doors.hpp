@@ -34,7 +34,9 @@
 #include "rangenav/core/angles.hpp"
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
+#include "rangenav/geometry/euclidean_clustering.hpp"
 #include "rangenav/mapping/occupancy_grid.hpp"
+#include "rangenav/search/kd_tree.hpp"
 
 namespace rangenav {
 
@@ -92,31 +94,24 @@ struct DoorModel {
   }
 };
 
-/// Eq. (1): clusters of points linked by chains of neighbours closer than epsilon. Returns one
-/// cluster index per point; clusters are numbered from 0 in order of their first point.
+/// Eq. (1): clusters of points linked by chains of neighbours closer than epsilon (the radius
+/// queries of a KdTree, followed by euclidean_clusters). Returns one cluster index per point;
+/// clusters are numbered from 0 in order of their first point.
 [[nodiscard]] inline std::vector<std::size_t> proximity_clusters(std::span<const Point2d> points,
                                                                  double epsilon) {
   detail::require_positive("proximity_clusters", "epsilon", epsilon);
-  constexpr std::size_t none = static_cast<std::size_t>(-1);
-  std::vector<std::size_t> label(points.size(), none);
-  std::vector<std::size_t> stack;
-  const double eps_sq = epsilon * epsilon;
-  std::size_t next = 0;
-  for (std::size_t s = 0; s < points.size(); ++s) {
-    if (label[s] != none) continue;
-    label[s] = next;
-    stack.assign(1, s);
-    while (!stack.empty()) {
-      const std::size_t i = stack.back();
-      stack.pop_back();
-      for (std::size_t j = 0; j < points.size(); ++j)
-        if (label[j] == none && (points[j] - points[i]).squaredNorm() < eps_sq) {
-          label[j] = next;
-          stack.push_back(j);
-        }
-    }
-    ++next;
-  }
+  std::vector<std::size_t> label(points.size(), 0);
+  if (points.empty()) return label;
+  const KdTree<2> tree(std::vector<Point2d>(points.begin(), points.end()));
+  EuclideanClusteringParams params;
+  params.tolerance = epsilon;  // chains of distances < epsilon, Eq. (1)
+  auto clusters = euclidean_clusters(tree, params);
+  // Each cluster starts at its smallest index (its breadth-first seed): order by it.
+  std::sort(clusters.begin(), clusters.end(),
+            [](const auto& a, const auto& b) { return a.front() < b.front(); });
+  for (std::size_t c = 0; c < clusters.size(); ++c)
+    for (const std::uint32_t i : clusters[c])
+      label[i] = c;
   return label;
 }
 

@@ -300,8 +300,10 @@ inline constexpr double apartment_scan_height = 0.30;
 inline constexpr std::size_t office_corridor_door_count = 8;
 
 /// A 20 m x 2 m corridor (x in [0, 20], y in [0, 2]) with offices 4 m deep on both sides, each
-/// 5 m wide with a 0.9 m door centred at x = 2.5 + 5 k. door_openings (rad, >= 0 opens into the
-/// office; empty = all closed) sets the 8 doors in the order of office_corridor_door_count.
+/// 5 m wide with a 0.9 m door centred at x = 2.5 + 5 k. door_openings (rad in [-pi, pi]; > 0 opens
+/// into the office, < 0 into the corridor; empty = all closed) sets the 8 doors in the order of
+/// office_corridor_door_count. A door opened into the corridor by more than about 40 deg blocks
+/// a robot of radius 0.3 m on the centre line.
 /// Objects: door_s0..door_s3, door_n0..door_n3. start = (1, 1, 0); tour along the corridor.
 /// With closed doors this corridor is symmetric under a half turn about (10, 1): a robot in it
 /// cannot tell x from 20 - x. `copier_alcove` adds what a real office corridor has and breaks
@@ -314,9 +316,9 @@ inline constexpr std::size_t office_corridor_door_count = 8;
     detail::throw_invalid_argument("office_corridor", "door_openings.size()", door_openings.size(),
                                    "must be 0 or 8");
   for (const double a : door_openings)
-    if (!(std::isfinite(a) && a >= 0 && a <= std::numbers::pi))
+    if (!(std::isfinite(a) && std::abs(a) <= std::numbers::pi))
       detail::throw_invalid_argument("office_corridor", "door_openings[i]", a,
-                                     "must be in [0, pi]");
+                                     "must be in [-pi, pi]");
   Scene s;
   World& w = s.world;
   w.set_ceiling_height(2.6);
