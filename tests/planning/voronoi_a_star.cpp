@@ -173,6 +173,20 @@ TEST_CASE("voronoi graph: pruning keeps exactly the clear edges inside the hull"
   // Every node keeps an edge.
   for (index_type i = 0; i < pruned.node_count(); ++i)
     REQUIRE(!pruned.incident_edges(i).empty());
+  // hull() is the convex hull of all the sites (computed from the sites of unbounded Voronoi
+  // cells only): closed, counter-clockwise and convex, its corners are sites, and it contains every
+  // site. A convex polygon with those properties is the convex hull.
+  const auto& hull = pruned.hull();
+  REQUIRE(hull.size() >= 4);
+  CHECK(hull.front() == hull.back());
+  for (std::size_t i = 0; i + 1 < hull.size(); ++i) {
+    CHECK(std::find(pruned.sites().begin(), pruned.sites().end(), hull[i]) != pruned.sites().end());
+    const Point2d e = hull[i + 1] - hull[i];
+    const Point2d f = hull[(i + 2) % (hull.size() - 1)] - hull[i + 1];
+    CHECK(e.x() * f.y() - e.y() * f.x() > 0.0);  // turns left at every corner
+  }
+  for (const Point2d& site : pruned.sites())
+    REQUIRE(inside_convex_ccw(hull, site, 1e-9));
 }
 
 TEST_CASE("voronoi graph: real occupancy maps (EVG-THIN test1 / test2)") {
