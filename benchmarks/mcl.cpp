@@ -6,6 +6,10 @@
 //   bench_mcl                                   everything
 //   bench_mcl --benchmark_filter=update         the full update
 //   bench_mcl --benchmark_filter=weight         the sensor model alone
+//   bench_mcl --benchmark_filter=door           door-aware MCL's update (8 doors, §IV): motion,
+//                                               Eq. (5)-(6) weighting with ML association,
+//                                               Douglas-Peucker polygon and per-particle Kalman
+//                                               door updates, resampling
 //   bench_mcl --benchmark_filter=fr079          the whole corrected FR079 log (4791 scans):
 //                                               update time on real scans and the tracking
 //                                               error against the corrected poses
@@ -23,6 +27,7 @@
 
 #include "rangenav/core/angles.hpp"
 #include "rangenav/io/carmen.hpp"
+#include "rangenav/localization/door_mcl.hpp"
 #include "rangenav/localization/mcl.hpp"
 #include "rangenav/sim/sensors.hpp"
 #include "rangenav/sim/worlds.hpp"
@@ -118,6 +123,48 @@ void BM_mcl_weight(benchmark::State& state) {
   state.counters["beams"] = static_cast<double>(z.end_points.size());
 }
 BENCHMARK(BM_mcl_weight)->Arg(1000)->Arg(10000)->Arg(50000)->Unit(benchmark::kMillisecond);
+
+/// Door-aware MCL on the same scans and grid, the corridor's 8 doors (true hinges and leaves,
+/// range [0, 90 deg]) removed from the grid. The scan's preparation (end points and the
+/// Douglas-Peucker polygon, once per scan) is timed too: it is part of the method's update.
+/// Arguments: particles, beams weighed (0: all 181; 30: the likelihood field's default).
+void BM_door_mcl_update(benchmark::State& state) {
+  const Setup& s = setup();
+  const auto n = static_cast<std::size_t>(state.range(0));
+  std::vector<DoorModel> doors;
+  for (const auto& d : s.scene.world.doors()) {
+    DoorModel m;
+    m.hinge = d.hinge;
+    m.leaf_length = d.length;
+    m.opening_max = std::numbers::pi / 2;
+    m.reference_angle = d.hinge.y() < 1 ? -std::numbers::pi / 2 : 0.0;
+    doors.push_back(m);
+  }
+  OccupancyGrid grid = s.grid;
+  remove_doors(grid, doors);
+  DoorAwareMclParams p;
+  p.field.max_beams = static_cast<std::size_t>(state.range(1));
+  p.sampling = fixed_count(n);
+  DoorAwareMcl mcl(grid, doors, p);
+  std::mt19937_64 rng(7);
+  mcl.initialize_gaussian(s.poses.front(), {0.2, 0.2, 0.05}, n, rng);
+  DoorAwareObservation z;
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const std::size_t i = k % s.scans.size(), j = (k + 1) % s.scans.size();
+    mcl.prepare(s.scans[j], Pose2d{}, z);
+    mcl.update(OdometryReading{s.poses[i], s.poses[j]}, z, rng);
+    benchmark::DoNotOptimize(mcl.filter().particles().data());
+    ++k;
+  }
+  state.counters["beams"] = static_cast<double>(z.end_points.size());
+  state.counters["segments"] = static_cast<double>(z.segments.size());
+  state.counters["Hz"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_door_mcl_update)
+    ->ArgsProduct({{1000, 10000, 50000}, {0, 30}})
+    ->Unit(benchmark::kMillisecond);
 
 /// The corrected FR079 log as tests/localization/mcl.cpp reads it: each scan with its corrected
 /// pose and the raw odometry (increments between ODOM records, skipping the jumps into the

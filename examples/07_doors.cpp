@@ -20,7 +20,16 @@
 // with the likelihood field's sigma_hit 0.2 m and 0.8 m (defaults: 10 runs, 12 m, 1k 5k 10k 50k
 // particles).
 //
-// Run it as `07_doors [seed]`.
+// `--irregular` (before the other arguments) moves the doors off their even 5 m spacing (south
+// doors centred at x = 1.4, 6.1, 13.6, 17.9, north ones at 3.3, 6.9, 11.2, 16.4), as in a real
+// corridor, where one office does not look like the next.
+// `--into-corridor` (before the other arguments) swings the doors into the corridor instead of
+// into the offices, as the doors of the paper's corridor did (its robot had to drive "two tight
+// curves" around open doors). The mapping passes are the same (open 90 deg, closed, open 45 deg;
+// the mapping poses are given, the robot does not drive past the doors) and the lesson localizes
+// with the doors closed and 30 deg open (wider openings block the robot's way).
+//
+// Run it as `07_doors [--irregular] [--into-corridor] [seed]`.
 
 #include <algorithm>
 #include <cmath>
@@ -242,10 +251,21 @@ struct CorridorMap {
   std::size_t true_doors{0};
 };
 
-CorridorMap map_corridor(bool alcove, std::uint64_t seed, bool verbose) {
-  const std::vector<std::vector<double>> passes = {std::vector<double>(8, 90 * deg),
-                                                   std::vector<double>(8, 0.0),
-                                                   std::vector<double>(8, 45 * deg)};
+/// Where the doors are and which way they swing: `swing` +1 into the offices, -1 into the
+/// corridor; `centers` empty: evenly spaced (office_corridor()'s door_centers).
+struct Layout {
+  int swing{1};
+  std::vector<double> centers;
+};
+
+/// The corridor with every door at `opening` (rad, into the side `layout.swing` says).
+sim::Scene corridor(double opening, bool alcove, const Layout& layout) {
+  return sim::office_corridor(std::vector<double>(8, layout.swing * opening), alcove,
+                              layout.centers);
+}
+
+CorridorMap map_corridor(bool alcove, std::uint64_t seed, bool verbose, const Layout& layout) {
+  const std::vector<double> passes = {90 * deg, 0.0, 45 * deg};
   CorridorMap m{OccupancyGrid::covering({0, -4}, {20, 6}, 0.5), {}, 0};
   DoorDetector detector;
   const sim::LaserScanner2D mapping_laser;  // SICK S300: 270 deg, 541 beams
@@ -254,7 +274,7 @@ CorridorMap map_corridor(bool alcove, std::uint64_t seed, bool verbose) {
   std::size_t dynamic = 0, vanished = 0;
   std::vector<sim::Door> true_doors;
   for (std::size_t pass = 0; pass < passes.size(); ++pass) {
-    const sim::Scene scene = sim::office_corridor(passes[pass], alcove);
+    const sim::Scene scene = corridor(passes[pass], alcove, layout);
     true_doors = scene.world.doors();
     for (int k = 0; k <= 94; ++k) {
       const bool east = pass % 2 == 0;
@@ -262,7 +282,7 @@ CorridorMap map_corridor(bool alcove, std::uint64_t seed, bool verbose) {
       m.grid.integrate(pose, mapping_laser.scan(scene.world, pose, rng), c);
       dynamic += c.dynamic_points.size();
       vanished += c.vanished_points.size();
-      detector.add(c);
+      detector.add(c, m.grid);
     }
   }
   m.doors = detector.doors();
@@ -289,7 +309,7 @@ CorridorMap map_corridor(bool alcove, std::uint64_t seed, bool verbose) {
 /// filters (the paper's Fig. 8-9) in the plain (symmetric) corridor and in the corridor with its
 /// copier alcove, with the likelihood field's sigma_hit at the tracking default (0.2 m) and
 /// widened to 0.8 m, doors closed and 30 deg open. Slow: see benchmarks/README.md.
-int run_global(int argc, char** argv) {
+int run_global(int argc, char** argv, const Layout& layout) {
   const std::uint64_t runs = argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 10;
   const double distance = argc > 3 ? std::strtod(argv[3], nullptr) : 12.0;
   std::vector<std::size_t> counts;
@@ -298,12 +318,12 @@ int run_global(int argc, char** argv) {
   if (counts.empty()) counts = {1000, 5000, 10000, 50000};
   std::string json;
   for (const bool alcove : {false, true}) {
-    const CorridorMap map = map_corridor(alcove, 1, false);
+    const CorridorMap map = map_corridor(alcove, 1, false, layout);
     std::cout << (alcove ? "corridor with the copier alcove" : "plain corridor") << ": "
               << map.doors.size() << " of " << map.true_doors << " doors detected\n";
     for (const double sigma_hit : {0.2, 0.8})
       for (const double opening : {0.0, 30 * deg}) {
-        const sim::Scene scene = sim::office_corridor(std::vector<double>(8, opening), alcove);
+        const sim::Scene scene = corridor(opening, alcove, layout);
         for (const std::size_t n : counts) {
           std::size_t mcl_ok = 0, door_ok = 0;
           for (std::uint64_t r = 0; r < runs; ++r) {
@@ -328,7 +348,9 @@ int run_global(int argc, char** argv) {
         }
       }
   }
-  std::cout << "{\"runs\": " << runs << ", \"distance_m\": " << fixed(distance, 1)
+  std::cout << "{\"doors_swing_into\": \"" << (layout.swing > 0 ? "offices" : "corridor")
+            << "\", \"doors_irregular\": " << (layout.centers.empty() ? "false" : "true")
+            << ", \"runs\": " << runs << ", \"distance_m\": " << fixed(distance, 1)
             << ", \"successes_mcl_door_mcl\": {" << json << "}}\n";
   return 0;
 }
@@ -336,14 +358,28 @@ int run_global(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // `--irregular`: doors off their even spacing; `--into-corridor`: doors swing into the
+  // corridor.
+  Layout layout;
+  for (bool more = true; more && argc > 1;) {
+    const std::string flag = argv[1];
+    more = flag == "--irregular" || flag == "--into-corridor";
+    if (flag == "--irregular") layout.centers = {1.4, 6.1, 13.6, 17.9, 3.3, 6.9, 11.2, 16.4};
+    if (flag == "--into-corridor") layout.swing = -1;
+    if (more) {
+      --argc;
+      ++argv;
+    }
+  }
+  const int swing = layout.swing;
   // `07_doors --global runs distance n1 n2 ...`: the global-localization success rates instead of
   // the default lesson (slow: see benchmarks/README.md).
   const bool global = argc > 1 && std::string(argv[1]) == "--global";
   const std::uint64_t seed = argc > 1 && !global ? std::strtoull(argv[1], nullptr, 10) : 1;
 
   // 1-2. Mapping with known poses while the doors change between passes; the doors.
-  if (global) return run_global(argc, argv);
-  const CorridorMap map = map_corridor(false, seed, true);
+  if (global) return run_global(argc, argv, layout);
+  const CorridorMap map = map_corridor(false, seed, true, layout);
   const OccupancyGrid& grid = map.grid;
   const std::vector<DoorModel>& doors = map.doors;
 
@@ -352,12 +388,13 @@ int main(int argc, char** argv) {
     const char* name;
     double opening;
   };
-  const State states[] = {{"closed", 0.0}, {"open", 90 * deg}, {"partially_open", 30 * deg}};
+  std::vector<State> states = {{"closed", 0.0}, {"open", 90 * deg}, {"partially_open", 30 * deg}};
+  if (swing < 0) states.erase(states.begin() + 1);  // open into the corridor: no way past
   std::string mcl_json, door_json;
   std::vector<Pose2d> drawn_path;
   DoorAwareState drawn_states;  // door estimates of the partially open run, for Fig. 4 bottom
   for (const State& s : states) {
-    const sim::Scene scene = sim::office_corridor(std::vector<double>(8, s.opening));
+    const sim::Scene scene = corridor(s.opening, false, layout);
     const TrackingResult r = track(scene.world, grid, doors, seed);
     std::cout << "doors " << s.name << ": standard MCL error mean " << fixed(r.mcl.mean)
               << " m, max " << fixed(r.mcl.max) << " m; door-aware MCL mean "
@@ -399,8 +436,11 @@ int main(int argc, char** argv) {
            "estimated door states (doors 30 deg open)",
            14);
   std::filesystem::create_directories("doors_out");
-  svg.save("doors_out/doors.svg");
-  std::cout << "wrote doors_out/doors.svg\n";
+  const std::string svg_path = std::string("doors_out/doors") +
+                               (layout.centers.empty() ? "" : "_irregular") +
+                               (swing > 0 ? "" : "_into_corridor") + ".svg";
+  svg.save(svg_path);
+  std::cout << "wrote " << svg_path << "\n";
 
   std::cout << "{\"doors_true\": " << map.true_doors << ", \"doors_detected\": " << doors.size()
             << ", \"mcl_mean_err_m\": {" << mcl_json << "}, \"door_mcl_mean_err_m\": {" << door_json

@@ -60,6 +60,7 @@
 #include "rangenav/registration/hayai.hpp"
 #include "rangenav/registration/icp.hpp"
 #include "rangenav/registration/point_to_line_solver.hpp"
+#include "rangenav/registration/point_to_plane_solver.hpp"
 #include "rangenav/registration/point_to_point_solver.hpp"
 #include "rangenav/registration/rejectors.hpp"
 #include "rangenav/scan/depth_image.hpp"

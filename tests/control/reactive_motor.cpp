@@ -193,8 +193,10 @@ TEST_CASE("motor: feed-forward + PI tracks speed steps on a PT1 motor") {
       const double direction = set > previous ? 1.0 : -1.0;
       double overshoot = 0.0;
       for (int k = 0; k < 300; ++k) {  // 3 s per step
+        const double before = pi_control.output();
         const double u = pi_control.step(set, motor.speed());
-        REQUIRE(std::abs(u) <= 1023.0);
+        REQUIRE(std::abs(u) <= 1023.0);                 // within the PWM band
+        REQUIRE(std::abs(u - before) <= 200.0 + 1e-9);  // and its change per cycle limited
         motor.step(u, dt);
         open.step(ff_only.step(set, open.speed()), dt);
         overshoot = std::max(overshoot, (motor.speed() - set) * direction);

@@ -226,6 +226,45 @@ TEST_CASE("pose controller: reaches the pose from every direction without cusps"
   CHECK(runs == 96);
 }
 
+TEST_CASE("pose controller: on the target's position but turned, it turns on the spot") {
+  // e = 0 leaves theta = atan2(-y_G, -x_G) undefined; the controller takes theta = 0 there and
+  // turns on the spot (v = gamma e = 0) toward the target heading.
+  IndiveriPoseController controller;
+  for (double phi : {-3.0, -1.2, -0.2, 0.1, 0.9, 2.5, pi}) {
+    Pose2d pose{0.0, 0.0, phi};
+    const auto cmd = controller.step(pose, {0.0, 0.0, 0.0});  // exactly e = 0
+    INFO("heading " << phi);
+    CHECK(cmd.e == 0.0);
+    CHECK(cmd.v == 0.0);
+    if (phi != pi) CHECK(cmd.omega * phi < 0.0);  // toward phi = 0 (either way from pi)
+    CHECK(std::abs(cmd.omega) <= 1.5);
+  }
+  // From a target's position (a rounding error away from it) or from up to the position tolerance
+  // away, with any heading error, the robot reaches the pose and stays near it.
+  const Pose2d target{1.0, -2.0, 0.7};
+  for (double distance : {0.0, 1e-12, 1e-6, 1e-3, 0.015})
+    for (double offset : {-3.0, -1.2, -0.2, 0.1, 0.9, 2.5, pi}) {
+      const double side = 1.3 * offset;  // some direction of the displacement
+      Pose2d pose{target.x + distance * std::cos(side), target.y + distance * std::sin(side),
+                  rangenav::normalize_angle(target.theta + offset)};
+      bool reached = false;
+      double drift = 0.0;
+      int k = 0;
+      for (; k < 3000 && !reached; ++k) {
+        const auto cmd = controller.step(pose, target);
+        reached = cmd.reached;
+        REQUIRE(cmd.v >= 0.0);
+        pose = integrate(pose, cmd.v, cmd.omega, 0.01);
+        drift = std::max(drift, (pose.position() - target.position()).norm());
+      }
+      INFO("distance " << distance << ", heading offset " << offset << ": " << k << " steps, drift "
+                       << drift);
+      CHECK(reached);
+      CHECK(drift <= 1.25 * distance + 1e-9);  // the law is scale-invariant: stays near
+      CHECK(std::abs(rangenav::angle_difference(pose.theta, target.theta)) < 0.035);
+    }
+}
+
 TEST_CASE("pose controller: the closed-form law and its contracts") {
   rangenav::IndiveriPoseControllerParams p;
   p.max_speed = 100.0;

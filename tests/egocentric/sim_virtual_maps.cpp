@@ -157,6 +157,11 @@ TEST_CASE("a person walking past leaves a trace that ages out", "[egocentric][si
     const auto ps = scanner.scan(world, pose, scanner.scan_time(k), rng);
     map.update(relative(previous, pose), extractor.push(ps, pose));
     if (k == crossing + extractor.delay()) trace_when_gone = trace();
+    // The trace stays until the configured count: the person's last readings away from the
+    // walls (|y| < 1.1 m, seen up to about 10 scans before the person is gone) have been moved
+    // fewer than max_age times here...
+    if (k == crossing + extractor.delay() + mp.max_age - 20) CHECK(trace() > 0);
+    // ...and are gone once the newest of them has been moved more than max_age times.
     if (k == crossing + extractor.delay() + mp.max_age + 2) CHECK(trace() == 0);
     // Floor points never enter: every map point lies on a wall or on the person's path.
     for (const auto& p : map.valid_points()) {

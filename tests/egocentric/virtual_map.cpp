@@ -333,6 +333,20 @@ TEST_CASE("restricted aperture drops points that leave it", "[egocentric][virtua
   const auto st = map.transform(Pose2d{0.0, 0.0, deg_to_rad(-40.0)});  // turn right
   CHECK(st.merged == 1);
   CHECK(map.valid_count() == 0);
+  // A full-turn scan from -180 deg at 1 deg, beams between the bin borders: only the 60 beams at
+  // -29.5 .. 29.5 deg fall into the aperture, beam 150 + j into bin j, whatever lies before or
+  // after them in the scan.
+  std::vector<double> ranges(360);
+  for (std::size_t i = 0; i < ranges.size(); ++i)
+    ranges[i] = 1.0 + 0.01 * static_cast<double>(i);
+  const LaserScand full_turn(-pi + deg_to_rad(0.5), deg_to_rad(1.0), 0.05, 30.0, ranges);
+  ObstacleMap<double> front(VirtualMapParams<double>{deg_to_rad(60.0), deg_to_rad(1.0)});
+  CHECK(front.insert(full_turn, PlanarMount<double>{Pose2d{}, 0.3}) == 60);
+  REQUIRE(front.valid_count() == 60);
+  for (std::size_t j = 0; j < 60; ++j) {
+    CHECK(front.bin(j).range == Approx(ranges[150 + j]).margin(1e-12));
+    CHECK(front.bin(j).bearing == Approx(deg_to_rad(-29.5 + static_cast<double>(j))));
+  }
 }
 
 TEST_CASE("2D scans insert through a planar mount", "[egocentric][virtual_map]") {

@@ -28,6 +28,34 @@ TEST_CASE("doors: proximity clustering, Eq. (1)", "[mapping][doors]") {
   CHECK(proximity_clusters(std::vector<Point2d>{}, 0.1).empty());
   CHECK_THROWS_WITH(proximity_clusters(points, 0.0),
                     "rangenav: proximity_clusters: argument 'epsilon' = 0 must be finite and > 0");
+  // Against brute force: 400 random points in a 4 m square, linked when closer than 0.15 m
+  // (union of all close pairs by repeated relabelling), numbered by their first point.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 4.0);
+  std::vector<Point2d> cloud(400);
+  for (auto& p : cloud)
+    p = {u(rng), u(rng)};
+  std::vector<std::size_t> root(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    root[i] = i;
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+      for (std::size_t j = 0; j < cloud.size(); ++j)
+        if ((cloud[i] - cloud[j]).norm() < 0.15 && root[j] < root[i]) {
+          root[i] = root[j];
+          changed = true;
+        }
+  }
+  std::vector<std::size_t> expected(cloud.size()), number(cloud.size(), cloud.size());
+  std::size_t next = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (number[root[i]] == cloud.size()) number[root[i]] = next++;
+    expected[i] = number[root[i]];
+  }
+  REQUIRE(next > 20);  // many clusters, some of several points
+  REQUIRE(next < 350);
+  CHECK(proximity_clusters(cloud, 0.15) == expected);
 }
 
 TEST_CASE("doors: mean line segment and the angle-consistency test, Eq. (2)", "[mapping][doors]") {
@@ -232,5 +260,53 @@ TEST_CASE("doors: all eight doors of the corridor, with their hinges, leaves and
       CHECK(std::min(direct, swapped) < 0.1);
     }
     CHECK(matches == 1);
+  }
+}
+
+TEST_CASE("doors: a hinge must be held by the static grid (doors swung into the corridor)",
+          "[mapping][doors][sim]") {
+  // Doors closed, then 60 deg open into the corridor, then 30 deg. The 60 deg leaves of opposite
+  // doors point at each other across the corridor: their lines cross near both tips, in free
+  // space, and two leaves "rotating" about that point passed the hinge test. The hinge of a door
+  // is held by its frame (an occupied cell of the static grid, §IV), a tip in the corridor is not.
+  const double deg = std::numbers::pi / 180;
+  const auto map = [&](bool with_grid) {
+    OccupancyGrid grid = OccupancyGrid::covering({0, -4}, {20, 6}, 0.5);
+    DoorDetector detector;
+    std::mt19937_64 rng(1);
+    const sim::LaserScanner2D laser;
+    ScanClassification c;
+    for (const double opening : {0.0, -60 * deg, -30 * deg}) {
+      const sim::Scene scene = sim::office_corridor(std::vector<double>(8, opening));
+      const bool east = opening != -60 * deg;
+      for (int k = 0; k <= 94; ++k) {
+        const Pose2d pose{east ? 0.6 + 0.2 * k : 19.4 - 0.2 * k, 1.0,
+                          east ? 0.0 : std::numbers::pi};
+        grid.integrate(pose, laser.scan(scene.world, pose, rng), c);
+        if (with_grid)
+          detector.add(c, grid);
+        else
+          detector.add(c);
+      }
+    }
+    return detector.doors();
+  };
+  const auto truth = sim::office_corridor().world.doors();
+  const auto nearest_true_hinge = [&](const DoorModel& d) {
+    double best = 1e9;
+    for (const auto& t : truth)
+      best = std::min(best, (t.hinge - d.hinge).norm());
+    return best;
+  };
+  std::size_t tip_to_tip = 0;
+  for (const DoorModel& d : map(false))
+    if (nearest_true_hinge(d) > 0.5) ++tip_to_tip;
+  CHECK(tip_to_tip >= 2);  // without the grid: "doors" hinged in the middle of the corridor
+  const auto doors = map(true);
+  CHECK(doors.size() >= 6);
+  for (const DoorModel& d : doors) {
+    CHECK(nearest_true_hinge(d) < 0.1);
+    CHECK(d.leaf_length == Approx(0.9).margin(0.1));
+    CHECK(d.opening_max - d.opening_min == Approx(30 * deg).margin(3 * deg));
   }
 }

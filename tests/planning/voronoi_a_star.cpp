@@ -9,11 +9,13 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <type_traits>
 #include <vector>
 
 #include "rangenav/io/pgm.hpp"
 #include "rangenav/planning/a_star.hpp"
 #include "rangenav/planning/voronoi_path_graph.hpp"
+#include "rangenav/scan/laser_scan.hpp"
 #include "test_support.hpp"
 
 using rangenav::AStar;
@@ -171,6 +173,20 @@ TEST_CASE("voronoi graph: pruning keeps exactly the clear edges inside the hull"
   // Every node keeps an edge.
   for (index_type i = 0; i < pruned.node_count(); ++i)
     REQUIRE(!pruned.incident_edges(i).empty());
+  // hull() is the convex hull of all the sites (computed from the sites of unbounded Voronoi
+  // cells only): closed, counter-clockwise and convex, its corners are sites, and it contains every
+  // site. A convex polygon with those properties is the convex hull.
+  const auto& hull = pruned.hull();
+  REQUIRE(hull.size() >= 4);
+  CHECK(hull.front() == hull.back());
+  for (std::size_t i = 0; i + 1 < hull.size(); ++i) {
+    CHECK(std::find(pruned.sites().begin(), pruned.sites().end(), hull[i]) != pruned.sites().end());
+    const Point2d e = hull[i + 1] - hull[i];
+    const Point2d f = hull[(i + 2) % (hull.size() - 1)] - hull[i + 1];
+    CHECK(e.x() * f.y() - e.y() * f.x() > 0.0);  // turns left at every corner
+  }
+  for (const Point2d& site : pruned.sites())
+    REQUIRE(inside_convex_ccw(hull, site, 1e-9));
 }
 
 TEST_CASE("voronoi graph: real occupancy maps (EVG-THIN test1 / test2)") {
@@ -236,6 +252,58 @@ TEST_CASE("voronoi graph: snapping, duplicates and degenerate input") {
   for (const auto& p : random_points(50, 5.0, 3))
     fpts.push_back(p.cast<float>());
   CHECK(VoronoiPathGraph(fpts, {.robot_width = 0.0, .safety_margin = 0.0}).edge_count() > 0);
+}
+
+TEST_CASE("voronoi graph: the same graph from any 2D PointCloud") {
+  // A room seen by a 2D laser in its centre: the scan's valid points, the same points as a
+  // std::vector, as an Eigen matrix (one point per column) and as a cloud with a duplicate of every
+  // point (the de-duplication must remove them) give one and the same graph.
+  const double pi = 3.14159265358979323846;
+  rangenav::ScanGeometry<double> geo{-pi, pi / 360, 720, 0.05, 10.0};
+  std::vector<double> ranges(720);
+  for (std::size_t i = 0; i < ranges.size(); ++i) {
+    const double a = geo.angle(i);
+    // A 6 m x 4 m room centred on the scanner, and every 40th beam lost (NaN: not a point).
+    ranges[i] = i % 40 == 7 ? std::nan("")
+                            : std::min(3.0 / std::abs(std::cos(a)), 2.0 / std::abs(std::sin(a)));
+  }
+  const rangenav::LaserScan<double> scan(geo, ranges);
+  REQUIRE(scan.valid_count() == 720 - 18);
+  const std::vector<Point2d> points(scan.valid_points().begin(), scan.valid_points().end());
+  Eigen::Matrix2Xd matrix(2, static_cast<Eigen::Index>(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i)
+    matrix.col(static_cast<Eigen::Index>(i)) = points[i];
+  std::vector<Point2d> doubled = points;
+  doubled.insert(doubled.end(), points.rbegin(), points.rend());
+
+  const VoronoiPathGraph reference(points);
+  REQUIRE(reference.edge_count() > 0);
+  const auto same = [&](const VoronoiPathGraph& g) {
+    REQUIRE(g.sites() == reference.sites());
+    REQUIRE(g.node_count() == reference.node_count());
+    REQUIRE(g.edge_count() == reference.edge_count());
+    for (std::size_t i = 0; i < g.edge_count(); ++i) {
+      const auto &e = g.edges()[i], &r = reference.edges()[i];
+      REQUIRE(g.nodes()[e.from].position == reference.nodes()[r.from].position);
+      REQUIRE(g.nodes()[e.to].position == reference.nodes()[r.to].position);
+      REQUIRE(e.clearance == r.clearance);
+    }
+  };
+  same(VoronoiPathGraph(scan));
+  same(VoronoiPathGraph(matrix));
+  const VoronoiPathGraph dedup(doubled);
+  CHECK(dedup.stats().input_points == 2 * points.size());
+  CHECK(dedup.stats().sites == points.size());
+  same(dedup);
+  // Every edge of the room's graph keeps Kurt3D's clearance (0.215 m) from the scanned walls.
+  for (const auto& e : reference.edges())
+    REQUIRE(brute_force_clearance(points, reference.nodes()[e.from].position,
+                                  reference.nodes()[e.to].position) >= 0.215 - 1e-9);
+  // Only 2D clouds are accepted.
+  static_assert(std::is_constructible_v<VoronoiPathGraph, const rangenav::LaserScan<double>&>);
+  static_assert(std::is_constructible_v<VoronoiPathGraph, const Eigen::Matrix2Xf&>);
+  static_assert(!std::is_constructible_v<VoronoiPathGraph, const std::vector<rangenav::Point3d>&>);
+  static_assert(!std::is_constructible_v<VoronoiPathGraph, const Eigen::Matrix3Xd&>);
 }
 
 TEST_CASE("voronoi graph: contracts") {

@@ -210,6 +210,13 @@ TEST_CASE("PT1 motor: step response in closed form", "[sim][motor]") {
   CHECK(motor.steady_state_speed(0.0) == 0.0);
   // An extra signed load shifts the steady state (turning friction of one wheel).
   CHECK(motor.steady_state_speed(400.0, 0.25) == Approx(1.45));
+  CHECK(motor.steady_state_speed(-400.0, 0.25) == Approx(-1.95));  // counted along +v
+  CHECK(motor.steady_state_speed(400.0, -0.25) == Approx(1.95));
+  // Friction stops a wheel but neither reverses it nor drives an undriven one.
+  CHECK(motor.steady_state_speed(400.0, 2.0) == 0.0);
+  CHECK(motor.steady_state_speed(-400.0, -2.0) == 0.0);
+  CHECK(motor.steady_state_speed(0.0, 0.25) == 0.0);
+  CHECK(motor.steady_state_speed(0.0, -0.25) == 0.0);
   motor.reset(0.5);
   for (int k = 0; k < 500; ++k)
     motor.step(0.0, 0.01);

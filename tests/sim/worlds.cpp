@@ -90,6 +90,39 @@ TEST_CASE("office corridor: door states decide what a beam sees", "[sim][worlds]
   const Scene n = office_corridor(open);
   const Door& d = n.world.doors()[6];
   CHECK(d.leaf().center.y() > 2.0);
+  // Negative openings swing into the corridor: door_s1 at -30 deg, hinged at (7.05, 0), stops a
+  // beam along y = 0.2 where its leaf crosses it, 0.2 / tan(30 deg) past the hinge (the leaf's
+  // face 2 cm nearer, measured along the beam 0.02 / sin(30 deg)).
+  open.assign(office_corridor_door_count, 0.0);
+  open[1] = -std::numbers::pi / 6;
+  const Scene c = office_corridor(open);
+  const RayHit leaf = c.world.cast_ray_2d({5.5, 0.2}, {1, 0}, 1.0, 20);
+  CHECK(leaf.kind == SurfaceKind::door);
+  CHECK(leaf.range == Approx(7.05 + 0.2 / std::tan(std::numbers::pi / 6) - 0.02 / 0.5 - 5.5));
+  // Doors moved off the even spacing: door_n1 centred at x = 6.9, the wall continues where the
+  // default door was (x = 7.5).
+  const std::vector<double> centers = {1.4, 6.1, 13.6, 17.9, 3.3, 6.9, 11.2, 16.4};
+  const Scene irregular = office_corridor({}, false, centers);
+  CHECK(irregular.world.doors()[5].hinge.x() == Approx(6.9 - 0.45));
+  const RayHit door_n1 = irregular.world.cast_ray_2d({6.9, 1.0}, {0, 1}, 1.0, 20);
+  CHECK(door_n1.kind == SurfaceKind::door);
+  CHECK(irregular.object_of({door_n1.kind, door_n1.index})->name == "door_n1");
+  const RayHit old_n1 = irregular.world.cast_ray_2d({7.5, 1.0}, {0, 1}, 1.0, 20);
+  CHECK(old_n1.kind == SurfaceKind::wall);
+  CHECK(old_n1.range == Approx(1.0));
+  std::vector<double> into_partition = centers;
+  into_partition[1] = 5.25;  // door_s1 would cut the partition at x = 5
+  CHECK_THROWS_WITH(office_corridor({}, false, into_partition),
+                    "rangenav: office_corridor: argument 'door_centers[1]' = 5.25 must be in "
+                    "[5.5, 9.5] (its office)");
+  std::vector<double> into_alcove = centers;
+  into_alcove[5] = 9.0;
+  CHECK_THROWS_WITH(office_corridor({}, true, into_alcove),
+                    "rangenav: office_corridor: argument 'door_centers[5]' = 9 must be in [5.5, "
+                    "9.5] (its office) and clear of the alcove");
+  CHECK_THROWS_WITH(office_corridor(std::vector<double>(8, -4.0)),
+                    "rangenav: office_corridor: argument 'door_openings[i]' = -4 must be in "
+                    "[-pi, pi]");
   CHECK_THROWS_WITH(
       office_corridor({1.0}),
       "rangenav: office_corridor: argument 'door_openings.size()' = 1 must be 0 or 8");

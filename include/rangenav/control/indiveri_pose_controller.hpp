@@ -80,18 +80,25 @@ class IndiveriPoseController {
       cmd.reached = true;
       return cmd;
     }
-    if (cmd.e == 0.0) return cmd;  // on the spot but turned: the law is undefined at e = 0
-    cmd.theta = std::atan2(-g.y, -g.x);
+    // On the target's position but turned, theta = atan2(-y_G, -x_G) is undefined (and below a
+    // nanometre it is the angle of rounding errors, while v dt = gamma e dt no longer moves the
+    // pose: the loop would stall wherever e c = 0). There theta = 0 is taken, the limit of
+    // approaching along the target's x axis: alpha = -phi, v = 0 and
+    // omega = gamma e c = -gamma (sin(phi) + beta phi), a turn on the spot toward phi = 0
+    // (sin(phi) + beta phi has the sign of phi on (-pi, pi]).
+    constexpr double unresolved = 1e-9;  // m
+    const bool on_spot = cmd.e < unresolved;
+    cmd.theta = on_spot ? 0.0 : std::atan2(-g.y, -g.x);
     cmd.alpha = normalize_angle(cmd.theta - cmd.phi);
     const double sinc = std::abs(cmd.alpha) < 1e-9 ? 1.0 : std::sin(cmd.alpha) / cmd.alpha;
     // e c = sin(alpha) + h theta sin(alpha)/alpha + beta alpha: finite as e -> 0.
     const double e_c =
         std::sin(cmd.alpha) + params_.h * cmd.theta * sinc + params_.beta * cmd.alpha;
-    double v = params_.gamma * cmd.e;
+    double v = on_spot ? 0.0 : params_.gamma * cmd.e;
     double omega = params_.gamma * e_c;  // v c = gamma e c
     // Common scaling keeps the curvature: the closed loop drives the same path, slower.
     const double scale =
-        std::min({1.0, params_.max_speed / v,
+        std::min({1.0, v > 0 ? params_.max_speed / v : 1.0,
                   std::abs(omega) > 0 ? params_.max_angular_speed / std::abs(omega) : 1.0});
     cmd.v = v * scale;
     cmd.omega = omega * scale;

@@ -17,6 +17,9 @@
 //      rejected (office doors do not swing through). The common end point is taken where the two
 //      leaves' lines cross, within `hinge_tolerance` of an end of both: the cells beside a hinge
 //      are never transient (§III's neighbourhood test), so observed leaves stop short of it.
+//      Given the grid (add(c, grid)), the hinge must also be held by it: an occupied cell within
+//      `hinge_support_radius` (the door's frame), which rejects opposite leaves meeting tip to
+//      tip in the free corridor.
 // A door is its hinge position, leaf length, reference angle (global direction of the leaf at
 // the smallest observed opening) and observed opening range [0, opening_max]. remove_doors()
 // clears the cells the leaves sweep from the static grid, keeping the hinge cell occupied as the
@@ -34,7 +37,9 @@
 #include "rangenav/core/angles.hpp"
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
+#include "rangenav/geometry/euclidean_clustering.hpp"
 #include "rangenav/mapping/occupancy_grid.hpp"
+#include "rangenav/search/kd_tree.hpp"
 
 namespace rangenav {
 
@@ -50,6 +55,11 @@ struct DoorDetectionParams {
   double length_tolerance{0.2};  ///< leaves of one door differ at most this much (m)
   double min_opening_difference{deg_to_rad(20.0)};  ///< "clearly different" opening angles
   double max_opening{std::numbers::pi};             ///< doors rotating farther are rejected
+  /// With a grid (add(c, grid), detect(&grid)): a hinge needs an occupied cell of the static
+  /// grid this close (m); the door's frame holds it (§IV: "we represent the doors' hinge joints
+  /// both as occupied cells in the grid map"). Two leaves meeting tip to tip in free space
+  /// (opposite doors swung towards each other) are no door.
+  double hinge_support_radius{0.15};
 
   void validate(std::string_view where) const {
     detail::require_positive(where, "epsilon", epsilon);
@@ -64,6 +74,7 @@ struct DoorDetectionParams {
     detail::require_positive(where, "length_tolerance", length_tolerance);
     detail::require_positive(where, "min_opening_difference", min_opening_difference);
     detail::require_positive(where, "max_opening", max_opening);
+    detail::require_positive(where, "hinge_support_radius", hinge_support_radius);
   }
 };
 
@@ -92,31 +103,24 @@ struct DoorModel {
   }
 };
 
-/// Eq. (1): clusters of points linked by chains of neighbours closer than epsilon. Returns one
-/// cluster index per point; clusters are numbered from 0 in order of their first point.
+/// Eq. (1): clusters of points linked by chains of neighbours closer than epsilon (the radius
+/// queries of a KdTree, followed by euclidean_clusters). Returns one cluster index per point;
+/// clusters are numbered from 0 in order of their first point.
 [[nodiscard]] inline std::vector<std::size_t> proximity_clusters(std::span<const Point2d> points,
                                                                  double epsilon) {
   detail::require_positive("proximity_clusters", "epsilon", epsilon);
-  constexpr std::size_t none = static_cast<std::size_t>(-1);
-  std::vector<std::size_t> label(points.size(), none);
-  std::vector<std::size_t> stack;
-  const double eps_sq = epsilon * epsilon;
-  std::size_t next = 0;
-  for (std::size_t s = 0; s < points.size(); ++s) {
-    if (label[s] != none) continue;
-    label[s] = next;
-    stack.assign(1, s);
-    while (!stack.empty()) {
-      const std::size_t i = stack.back();
-      stack.pop_back();
-      for (std::size_t j = 0; j < points.size(); ++j)
-        if (label[j] == none && (points[j] - points[i]).squaredNorm() < eps_sq) {
-          label[j] = next;
-          stack.push_back(j);
-        }
-    }
-    ++next;
-  }
+  std::vector<std::size_t> label(points.size(), 0);
+  if (points.empty()) return label;
+  const KdTree<2> tree(std::vector<Point2d>(points.begin(), points.end()));
+  EuclideanClusteringParams params;
+  params.tolerance = epsilon;  // chains of distances < epsilon, Eq. (1)
+  auto clusters = euclidean_clusters(tree, params);
+  // Each cluster starts at its smallest index (its breadth-first seed): order by it.
+  std::sort(clusters.begin(), clusters.end(),
+            [](const auto& a, const auto& b) { return a.front() < b.front(); });
+  for (std::size_t c = 0; c < clusters.size(); ++c)
+    for (const std::uint32_t i : clusters[c])
+      label[i] = c;
   return label;
 }
 
@@ -234,6 +238,19 @@ class DoorDetector {
     detect();
     return found;
   }
+  /// add() whose door detection also requires every hinge to be held by the static `grid`
+  /// (DoorDetectionParams::hinge_support_radius); pass the grid the classification came from.
+  std::size_t add(const ScanClassification& c, const OccupancyGrid& grid) {
+    std::size_t found = 0;
+    for (const auto* set : {&c.dynamic_points, &c.vanished_points}) {
+      extract_lines(*set, lines_);
+      found += lines_.size();
+      for (const auto& line : lines_)
+        add_leaf(line);
+    }
+    detect(&grid);
+    return found;
+  }
 
   /// Step 3 for a line object: keeps it if its length is within [lambda_min, lambda_max].
   void add_leaf(const LineObject& line) {
@@ -255,8 +272,8 @@ class DoorDetector {
     leaves_.push_back(line);
   }
 
-  /// Step 4 over the whole set of potential leaves.
-  void detect() {
+  /// Step 4 over the whole set of potential leaves; with a `grid`, hinges must be held by it.
+  void detect(const OccupancyGrid* grid = nullptr) {
     doors_.clear();
     const double hinge_sq = params_.hinge_tolerance * params_.hinge_tolerance;
     used_.assign(leaves_.size(), 0);
@@ -275,6 +292,7 @@ class DoorDetector {
         return std::min((l.a - hinge).squaredNorm(), (l.b - hinge).squaredNorm());
       };
       if (near_end_sq(li) >= hinge_sq || near_end_sq(lj) >= hinge_sq) return false;
+      if (grid != nullptr && !held_by(*grid, hinge)) return false;
       return try_door(hinge, i, j);
     };
     for (std::size_t i = 0; i < leaves_.size(); ++i)
@@ -286,6 +304,21 @@ class DoorDetector {
   void remove_doors(OccupancyGrid& grid) const { rangenav::remove_doors(grid, doors_); }
 
  private:
+  /// An occupied cell of `grid` within hinge_support_radius of `hinge`.
+  [[nodiscard]] bool held_by(const OccupancyGrid& grid, const Point2d& hinge) const {
+    const double r = params_.hinge_support_radius;
+    const OccupancyGrid::Index lo = grid.cell_of(hinge - Point2d::Constant(r));
+    const OccupancyGrid::Index hi = grid.cell_of(hinge + Point2d::Constant(r));
+    for (int y = lo.y(); y <= hi.y(); ++y)
+      for (int x = lo.x(); x <= hi.x(); ++x) {
+        const OccupancyGrid::Index c(x, y);
+        if (grid.contains(c) && grid.is_occupied(c) &&
+            (grid.cell_center(c) - hinge).squaredNorm() <= r * r)
+          return true;
+      }
+    return false;
+  }
+
   /// Leaves i and j share `hinge`: a door if their lengths agree and their angles differ
   /// clearly; then every other leaf on that hinge widens the opening range.
   bool try_door(const Point2d& hinge, std::size_t i, std::size_t j) {

@@ -2,13 +2,15 @@
 // A first-order (PT1) model of a DC wheel motor driven by PWM, to test motor controllers in
 // simulation (paper 003 §2.1, Fig. 2 left: the step response of a wheel is a first-order lag).
 //
-//   tau v'(t) = v_ss(u) - v(t),   v_ss(u) = sign(u) max(0, K |T(u)| - offset) - load
+//   tau v'(t) = v_ss(u) - v(t),   v_ss(u) = sign(u) max(0, K |T(u)| - offset - sign(u) load)
 //
 // T is the motor's no-load PWM -> speed characteristic (paper 003 Fig. 2 right, e.g. a
 // SpeedPwmTable's speed()), K the fraction of it the motor delivers (1 with a full battery,
 // less with a weak one), `offset` the constant speed lost to the floor (the carpet: "the no-load
 // measurement and the one on carpet differ only by a constant offset"), and `load` an extra signed
-// speed loss per step (e.g. the skid friction while turning). With u held for dt the model is
+// speed loss (e.g. the skid friction of one wheel while turning, counted along +v). Friction
+// slows a wheel but cannot drive it: like the offset, a load never reverses the driven wheel's
+// direction nor moves an undriven one (v_ss = 0 for u = 0). With u held for dt the model is
 // integrated exactly:
 //
 //   v(t + dt) = v_ss + (v(t) - v_ss) exp(-dt / tau).
@@ -50,12 +52,13 @@ class Pt1Motor {
     detail::require_finite("Pt1Motor", "initial_speed", initial_speed);
   }
 
-  /// v_ss(u): the speed the motor settles at with PWM u held and the extra signed `load`.
+  /// v_ss(u): the speed the motor settles at with PWM u held and the extra signed `load` (a
+  /// speed loss along +v; it can stop the wheel but neither reverse nor drive it).
   [[nodiscard]] double steady_state_speed(double pwm, double load = 0.0) const {
-    if (pwm == 0.0 || !std::isfinite(pwm)) return -load;
-    const double driven =
-        std::max(0.0, params_.gain * std::abs(characteristic_(pwm)) - params_.load_offset);
-    return std::copysign(driven, pwm) - load;
+    if (pwm == 0.0 || !std::isfinite(pwm)) return 0.0;
+    const double driven = params_.gain * std::abs(characteristic_(pwm)) - params_.load_offset -
+                          std::copysign(1.0, pwm) * load;
+    return std::copysign(std::max(0.0, driven), pwm);
   }
 
   /// Holds PWM `pwm` for `dt` seconds (exact solution of the PT1 equation) and returns the new

@@ -12,11 +12,13 @@
 //                        its true planes (paper 004's evaluation scene).
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
 #include <numbers>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -85,7 +87,7 @@ inline std::uint32_t u32(std::size_t i) {
 
 /// Walls from a to b leaving openings [from, to] (distances along a -> b).
 inline void wall_with_openings(World& w, const Point2d& a, const Point2d& b,
-                               std::initializer_list<std::pair<double, double>> openings,
+                               std::span<const std::pair<double, double>> openings,
                                double height = 2.5) {
   const double length = (b - a).norm();
   const Point2d u = (b - a) / length;
@@ -95,6 +97,11 @@ inline void wall_with_openings(World& w, const Point2d& a, const Point2d& b,
     s = to;
   }
   if (s < length) w.add_wall(a + s * u, b, height);
+}
+inline void wall_with_openings(World& w, const Point2d& a, const Point2d& b,
+                               std::initializer_list<std::pair<double, double>> openings,
+                               double height = 2.5) {
+  wall_with_openings(w, a, b, std::span<const std::pair<double, double>>(openings), height);
 }
 
 inline SceneObject make_object(std::string name, std::string type) {
@@ -300,36 +307,59 @@ inline constexpr double apartment_scan_height = 0.30;
 inline constexpr std::size_t office_corridor_door_count = 8;
 
 /// A 20 m x 2 m corridor (x in [0, 20], y in [0, 2]) with offices 4 m deep on both sides, each
-/// 5 m wide with a 0.9 m door centred at x = 2.5 + 5 k. door_openings (rad, >= 0 opens into the
-/// office; empty = all closed) sets the 8 doors in the order of office_corridor_door_count.
+/// 5 m wide with a 0.9 m door centred at x = 2.5 + 5 k. door_openings (rad in [-pi, pi]; > 0 opens
+/// into the office, < 0 into the corridor; empty = all closed) sets the 8 doors in the order of
+/// office_corridor_door_count. A door opened into the corridor by more than about 40 deg blocks
+/// a robot of radius 0.3 m on the centre line.
+/// `door_centers` (empty: 2.5 + 5 k) moves the doors along their walls, each within its own
+/// office (at least 0.5 m from its partitions, and clear of the alcove): a real corridor's doors
+/// are not evenly spaced, and with evenly spaced doors every office looks like the next one.
 /// Objects: door_s0..door_s3, door_n0..door_n3. start = (1, 1, 0); tour along the corridor.
 /// With closed doors this corridor is symmetric under a half turn about (10, 1): a robot in it
 /// cannot tell x from 20 - x. `copier_alcove` adds what a real office corridor has and breaks
 /// that symmetry: a 1.2 m wide, 0.5 m deep alcove in the north wall at x in [8.4, 9.6] (object
 /// "copier_alcove", taken from the north office between the doors n1 and n2).
 [[nodiscard]] inline Scene office_corridor(const std::vector<double>& door_openings = {},
-                                           bool copier_alcove = false) {
+                                           bool copier_alcove = false,
+                                           const std::vector<double>& door_centers = {}) {
   using namespace detail_worlds;
   if (!door_openings.empty() && door_openings.size() != office_corridor_door_count)
     detail::throw_invalid_argument("office_corridor", "door_openings.size()", door_openings.size(),
                                    "must be 0 or 8");
   for (const double a : door_openings)
-    if (!(std::isfinite(a) && a >= 0 && a <= std::numbers::pi))
+    if (!(std::isfinite(a) && std::abs(a) <= std::numbers::pi))
       detail::throw_invalid_argument("office_corridor", "door_openings[i]", a,
-                                     "must be in [0, pi]");
+                                     "must be in [-pi, pi]");
+  if (!door_centers.empty() && door_centers.size() != office_corridor_door_count)
+    detail::throw_invalid_argument("office_corridor", "door_centers.size()", door_centers.size(),
+                                   "must be 0 or 8");
+  const double length = 20, width = 2, depth = 4, door = 0.9;
+  const auto center = [&](std::size_t i) {
+    return door_centers.empty() ? 2.5 + 5.0 * static_cast<double>(i % 4) : door_centers[i];
+  };
+  for (std::size_t i = 0; i < door_centers.size(); ++i) {
+    const double lo = 5.0 * static_cast<double>(i % 4) + 0.5, c = door_centers[i];
+    const bool in_alcove = copier_alcove && i >= 4 && c + door / 2 > 8.4 && c - door / 2 < 9.6;
+    if (!(c >= lo && c <= lo + 4.0) || in_alcove)
+      detail::throw_invalid_argument(
+          "office_corridor", "door_centers[" + std::to_string(i) + "]", c,
+          "must be in [" + detail::format_value(lo) + ", " + detail::format_value(lo + 4.0) +
+              "] (its office)" + (copier_alcove && i >= 4 ? " and clear of the alcove" : ""));
+  }
   Scene s;
   World& w = s.world;
   w.set_ceiling_height(2.6);
-  const double length = 20, width = 2, depth = 4, door = 0.9;
   for (int side = 0; side < 2; ++side) {
     const double y = side == 0 ? 0.0 : width;
     const double y_far = side == 0 ? -depth : width + depth;
-    if (side == 1 && copier_alcove)
-      wall_with_openings(w, {0, y}, {length, y},
-                         {{2.05, 2.95}, {7.05, 7.95}, {8.4, 9.6}, {12.05, 12.95}, {17.05, 17.95}});
-    else
-      wall_with_openings(w, {0, y}, {length, y},
-                         {{2.05, 2.95}, {7.05, 7.95}, {12.05, 12.95}, {17.05, 17.95}});
+    std::vector<std::pair<double, double>> openings;
+    for (std::size_t k = 0; k < 4; ++k) {
+      const double c = center(static_cast<std::size_t>(side) * 4 + k);
+      openings.emplace_back(c - door / 2, c + door / 2);
+    }
+    if (side == 1 && copier_alcove) openings.emplace_back(8.4, 9.6);
+    std::sort(openings.begin(), openings.end());
+    wall_with_openings(w, {0, y}, {length, y}, openings);
     w.add_wall({0, y_far}, {length, y_far});
     for (int k = 0; k <= 4; ++k)
       w.add_wall({5.0 * k, y}, {5.0 * k, y_far});
@@ -339,7 +369,7 @@ inline constexpr std::size_t office_corridor_door_count = 8;
       std::string name = side == 0 ? "door_s" : "door_n";
       name.append(std::to_string(k));
       add_named_door(s, std::move(name),
-                     {{2.5 + 5.0 * k - door / 2, y}, 0.0, door, side == 0 ? -open : open});
+                     {{center(i) - door / 2, y}, 0.0, door, side == 0 ? -open : open});
     }
   }
   if (copier_alcove) {
