@@ -145,7 +145,11 @@ class SparsePointMap {
     normals_.resize(tree_.size(), point_type::Zero());
     dirty_.assign(tree_.size(), 0);
     for (std::size_t i = first; i < tree_.size(); ++i) {
-      tree_.radius(tree_.point(i), radius_sq, neighbors_);
+      // Only which points are near matters here, not their order.
+      if constexpr (requires { tree_.radius(tree_.point(i), radius_sq, neighbors_, false); })
+        tree_.radius(tree_.point(i), radius_sq, neighbors_, false);
+      else
+        tree_.radius(tree_.point(i), radius_sq, neighbors_);
       for (const auto& nb : neighbors_)
         dirty_[nb.index] = 1;
       dirty_[i] = 1;

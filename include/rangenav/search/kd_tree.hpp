@@ -287,12 +287,14 @@ class GrowingKdTree {
     return out.size();
   }
 
-  std::size_t radius(const point_type& q, Scalar radius_sq,
-                     std::vector<Neighbor<Scalar>>& out) const {
+  /// All points with distance_sq < radius_sq, ascending; with `sorted` false in no particular
+  /// order (cheaper when the order does not matter).
+  std::size_t radius(const point_type& q, Scalar radius_sq, std::vector<Neighbor<Scalar>>& out,
+                     bool sorted = true) const {
     out.clear();
     detail::RadiusCollector<Scalar> c(out, radius_sq);
     search_all(c, q);
-    detail::sort_by_distance(out);
+    if (sorted) detail::sort_by_distance(out);
     return out.size();
   }
 
