@@ -45,6 +45,37 @@ TEST_CASE("fast_atan2 agrees with std::atan2 to 1e-10 in every octant",
   CHECK(std::abs(detail::fast_atan2(0.3f, -2.0f) - std::atan2(0.3f, -2.0f)) < 1e-6f);
 }
 
+TEST_CASE("the shifted bearing of q + t agrees with atan2 for small, medium and large shifts",
+          "[egocentric][virtual_map]") {
+  // |t| / |q| from 1e-4 (a robot's motion between scans) over 0.05 (a scanner mounted off the
+  // rotation centre) to 2 (past the series' range), in every direction of q and t, across the
+  // wrap at pi.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> angle(-pi, pi);
+  double worst = 0, worst_small = 0, worst_series = 0;
+  for (const double ratio : {1e-4, 3e-3, 0.0099, 0.05, 0.099, 0.5, 2.0})
+    for (int i = 0; i < 2000; ++i) {
+      const double qa = angle(rng), ta = angle(rng), q_range = 0.5 + 0.001 * i;
+      const double qx = q_range * std::cos(qa), qy = q_range * std::sin(qa);
+      const double tx = ratio * q_range * std::cos(ta), ty = ratio * q_range * std::sin(ta);
+      const double truth = std::atan2(qy + ty, qx + tx);
+      const auto error = [&](double b) { return std::abs(std::remainder(b - truth, 2 * pi)); };
+      worst = std::max(worst, error(detail::shifted_bearing(qx, qy, q_range, qa, tx, ty)));
+      worst_small = std::max(
+          worst_small, error(detail::shifted_bearing_small_shift(qx, qy, q_range, qa, tx, ty)));
+      if (ratio <= 0.05)  // |r| < 0.06: the series of either function, not fast_atan2
+        worst_series =
+            std::max({worst_series, error(detail::shifted_bearing(qx, qy, q_range, qa, tx, ty)),
+                      error(detail::shifted_bearing_small_shift(qx, qy, q_range, qa, tx, ty))});
+      const double b = detail::shifted_bearing_small_shift(qx, qy, q_range, qa, tx, ty);
+      REQUIRE(b > -pi);
+      REQUIRE(b <= pi);
+    }
+  CHECK(worst < 1e-10);  // the series (1e-12) or fast_atan2 (1e-10)
+  CHECK(worst_small < 1e-10);
+  CHECK(worst_series < 1e-13);
+}
+
 TEST_CASE("virtual map layout: N = aperture / resolution bins, dummies everywhere",
           "[egocentric][virtual_map]") {
   ObstacleMap<double> obstacle;  // 360 deg at 0.5 deg
@@ -333,6 +364,20 @@ TEST_CASE("restricted aperture drops points that leave it", "[egocentric][virtua
   const auto st = map.transform(Pose2d{0.0, 0.0, deg_to_rad(-40.0)});  // turn right
   CHECK(st.merged == 1);
   CHECK(map.valid_count() == 0);
+  // A full-turn scan from -180 deg at 1 deg, beams between the bin borders: only the 60 beams at
+  // -29.5 .. 29.5 deg fall into the aperture, beam 150 + j into bin j, whatever lies before or
+  // after them in the scan.
+  std::vector<double> ranges(360);
+  for (std::size_t i = 0; i < ranges.size(); ++i)
+    ranges[i] = 1.0 + 0.01 * static_cast<double>(i);
+  const LaserScand full_turn(-pi + deg_to_rad(0.5), deg_to_rad(1.0), 0.05, 30.0, ranges);
+  ObstacleMap<double> front(VirtualMapParams<double>{deg_to_rad(60.0), deg_to_rad(1.0)});
+  CHECK(front.insert(full_turn, PlanarMount<double>{Pose2d{}, 0.3}) == 60);
+  REQUIRE(front.valid_count() == 60);
+  for (std::size_t j = 0; j < 60; ++j) {
+    CHECK(front.bin(j).range == Approx(ranges[150 + j]).margin(1e-12));
+    CHECK(front.bin(j).bearing == Approx(deg_to_rad(-29.5 + static_cast<double>(j))));
+  }
 }
 
 TEST_CASE("2D scans insert through a planar mount", "[egocentric][virtual_map]") {
