@@ -95,13 +95,16 @@ GeometricMapperParams params(double extraction_leaf) {
   return p;
 }
 
+/// Arg 1: key frames join the point map voxel-filtered (the default); 0: at full resolution.
 void BM_registration(benchmark::State& state) {
   const Frames& f = frames();
   std::size_t planes = 0;
   double error = 0;
+  auto p = params(0.02);
+  p.point_map_downsampled = state.range(0) != 0;
   for (auto _ : state) {
     state.PauseTiming();
-    GeometricMapper mapper(params(0.02));
+    GeometricMapper mapper(p);
     GeometricFrameReport first;
     mapper.register_frame(f.first, f.first_pose, first);
     GeometricFrameReport report;
@@ -285,7 +288,7 @@ void BM_pcl_extraction(benchmark::State& state) {
 BENCHMARK(BM_pcl_extraction)->Arg(0)->Arg(20)->Unit(benchmark::kMillisecond);
 #endif
 
-BENCHMARK(BM_registration)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_registration)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_clustering)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_plane_extraction_organized)->Arg(0)->Arg(50)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_plane_extraction)->Arg(0)->Arg(20)->Unit(benchmark::kMillisecond);

@@ -2,6 +2,7 @@
 // against the simulator's true poses and planes.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -10,10 +11,14 @@
 #include <vector>
 
 #include "rangenav/core/error.hpp"
+#include "rangenav/geometry/voxel_grid.hpp"
+#include "rangenav/io/mrpt_pose.hpp"
+#include "rangenav/io/pcd.hpp"
 #include "rangenav/mapping/geometric_mapper.hpp"
 #include "rangenav/scan/depth_image.hpp"
 #include "rangenav/sim/sensors.hpp"
 #include "rangenav/sim/worlds.hpp"
+#include "test_support.hpp"
 
 using namespace rangenav;
 
@@ -64,12 +69,25 @@ TEST_CASE("GeometricMapper extracts the kitchen's true planes from an aligned fr
   const auto cloud = to_organized_cloud(camera.capture(scene.world, robot, rng));
   const Transform3d truth = sim::robot_transform(robot) * camera.camera_to_robot();
 
-  GeometricMapper mapper(kitchen_params());
+  // The organised frame is clustered over image neighbours by default; the kd-tree's radius
+  // queries (organized_clustering false) must find the same true planes.
+  const bool organized = GENERATE(true, false);
+  CAPTURE(organized);
+  auto params = kitchen_params();
+  params.organized_clustering = organized;
+  GeometricMapper mapper(params);
   const GeometricFrameReport report = mapper.process(cloud, truth, rng);
   CHECK(report.key_frame);
   CHECK(report.registered);
   CHECK(!report.icp);  // the first frame starts the map
   CHECK(mapper.point_map().size() > 500);
+  // The point map holds the voxel-filtered frame (point_map_downsampled): one point per voxel.
+  CHECK(mapper.point_map().size() == voxel_downsample(cloud, params.voxel_leaf).size());
+  // Every finite pixel is offered to the extraction (the full-resolution frame).
+  CHECK(report.extraction_points ==
+        static_cast<std::size_t>(std::count_if(cloud.points.begin(), cloud.points.end(),
+                                               [](const Point3d& q) { return q.allFinite(); })));
+  CHECK(report.clusters > 0);
   REQUIRE(!report.planes.empty());
   // The big surfaces are found, each once, on their true plane with a small residual.
   std::map<std::string, int> found;
@@ -206,4 +224,86 @@ TEST_CASE("GeometricMapper rejects a frame that does not fit the map and bad par
   CHECK_THROWS_WITH(GeometricMapper(bad),
                     "rangenav: GeometricMapper: argument 'params.min_fitness' = 1.5 must be in "
                     "[0, 1]");
+}
+
+TEST_CASE("GeometricMapper merges the floor of MRPT's four RGB-D frames into one polygon",
+          "[mapping]") {
+  // Issue 9's real-data check: four organised 160 x 120 frames with camera poses; the floor,
+  // seen in every frame, must end as one map shape (the settings of example 08).
+  if (test::data_file_or_skip("mrpt_pbmap/pointcloud0.pcd").empty()) return;
+  GeometricMapperParams params;
+  params.key_frames.min_distance = 0.0;
+  params.key_frames.min_angle = 0.0;
+  params.clustering.min_cluster_size = 300;
+  params.planes.min_inliers = 300;
+  params.planes.hull.alpha = 0.08;
+  params.planes.hull.resolution = 0.005;
+  GeometricMapper mapper(params);
+  std::mt19937 rng(5);
+  // Optical frame (x right, y down, z ahead) -> the body frame the mapper expects.
+  Transform3d body_to_optical = Transform3d::Identity();
+  body_to_optical.linear() << 0, -1, 0, 0, 0, -1, 1, 0, 0;
+  std::size_t floor_extractions = 0;
+  for (int k = 0; k < 4; ++k) {
+    const std::string n = std::to_string(k);
+    Cloud3d cloud =
+        io::read_pcd<double>(test::data_file_or_skip("mrpt_pbmap/pointcloud" + n + ".pcd"));
+    REQUIRE(cloud.is_organized());
+    for (auto& p : cloud.points)
+      p = body_to_optical.inverse() * p;
+    const Transform3d pose =
+        io::read_mrpt_pose(test::data_file_or_skip("mrpt_pbmap/pose" + n + ".mat")) *
+        body_to_optical;
+    const GeometricFrameReport r = mapper.process(cloud, pose, rng);
+    REQUIRE(r.registered);
+    CHECK(r.clusters > 0);
+    for (const auto& p : r.planes)
+      if (std::abs(p.shape.plane.normal.z()) > 0.99 && std::abs(p.shape.plane.d) < 0.05)
+        ++floor_extractions;
+  }
+  // The floor (horizontal, through the world origin) was extracted several times and is one
+  // shape holding at least all those extractions (pieces tilted more merge into it too).
+  CHECK(floor_extractions >= 4);
+  int floors = 0;
+  for (const auto& s : mapper.map().shapes())
+    if (std::abs(s.surface.plane.normal.z()) > 0.99 && std::abs(s.surface.plane.d) < 0.05) {
+      ++floors;
+      CHECK(s.delta >= static_cast<double>(floor_extractions));
+      CHECK(s.surface.area() > 1.0);
+    }
+  CHECK(floors == 1);
+}
+
+TEST_CASE("GeometricMapper outlines PCL's table scene's table top as one polygon with a hole",
+          "[mapping]") {
+  const auto path = test::data_file_or_skip("pcl_test/table_scene_mug_stereo_textured.pcd");
+  if (path.empty()) return;
+  GeometricMapperParams params;
+  params.clustering.min_cluster_size = 2000;
+  params.clustering.tolerance = 0.02;
+  params.planes.min_inliers = 2000;
+  params.planes.distance_threshold = 0.015;
+  params.planes.hull.alpha = 0.03;
+  params.planes.hull.resolution = 0.002;
+  params.extraction_leaf = 0.005;  // unorganised after the voxel filter: the kd-tree path
+  GeometricMapper mapper(params);
+  std::mt19937 rng(5);
+  Cloud3d cloud = io::read_pcd<double>(path);
+  Transform3d body_to_optical = Transform3d::Identity();  // as example 08
+  body_to_optical.linear() << 0, -1, 0, 0, 0, -1, 1, 0, 0;
+  for (auto& p : cloud.points)
+    p = body_to_optical.inverse() * p;
+  const GeometricFrameReport r = mapper.process(cloud, Transform3d::Identity(), rng);
+  REQUIRE(r.registered);
+  // Two large planes: the table top (with the mug's footprint as its one hole) and the
+  // floor/wall behind it, each one polygon (not parallel: no piece of either is left apart);
+  // a small extra patch (a few hundredths of a m^2, depending on the random draws) may appear.
+  std::vector<const PlanarPolygon<double>*> large;
+  for (const auto& s : mapper.map().shapes())
+    if (s.surface.area() > 0.1) large.push_back(&s.surface);
+  REQUIRE(large.size() == 2);
+  CHECK(std::abs(large[0]->plane.normal.dot(large[1]->plane.normal)) < 0.95);
+  CHECK(large[0]->polygon.holes.size() + large[1]->polygon.holes.size() == 1);
+  for (const auto& s : mapper.map().shapes())
+    if (s.surface.area() <= 0.1) CHECK(s.surface.area() < 0.05);
 }

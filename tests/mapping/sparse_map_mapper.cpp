@@ -204,6 +204,54 @@ TEST_CASE("IncrementalMapper works unchanged in 3D (6-DOF) with voxel filtering"
   }
 }
 
+TEST_CASE("IncrementalMapper inserts voxel-filtered key frames with insert_downsampled",
+          "[mapping]") {
+  std::mt19937 rng(12);
+  const auto world = test::room_3d(rng, 1500);
+  IncrementalMapperParams<double> params;
+  params.voxel_size = 0.1;
+  params.map.epsilon_d = 0.1;
+  params.map.deduplicate_within_scan = false;
+  params.insert_downsampled = true;
+  params.key_frames = {0.0, 0.0};  // every registered cloud is a key frame
+  IncrementalMapper<3> mapper(params);
+  const Transform3d step = test::make_transform3(0.1, 0.02, 0.0, 0.0, 0.0, 0.03);
+  Transform3d truth = Transform3d::Identity(), odom = truth;
+  std::vector<std::size_t> sizes{0};
+  for (int i = 0; i < 8; ++i) {
+    truth = truth * step;
+    odom = odom * test::make_transform3(0.11, 0.0, 0.01, 0.005, 0.0, 0.04);
+    auto cloud = test::transformed<3>(world, truth.inverse(Eigen::Isometry));
+    test::add_noise<3>(cloud, 0.003, rng);
+    const auto update = mapper.process(cloud, odom);
+    const auto filtered = voxel_downsample(cloud, 0.1);
+    if (i == 0) {
+      // The first cloud is the map (its frame the map frame): exactly its voxel filter.
+      REQUIRE(mapper.map().size() == filtered.size());
+      for (std::size_t k = 0; k < filtered.size(); ++k)
+        CHECK((mapper.map().points()[k] - filtered[k]).norm() < 1e-12);
+    } else {
+      const auto [et, er] =
+          test::transform_error<3>(update.pose, Transform3d(step.inverse(Eigen::Isometry) * truth));
+      CHECK(et < 0.03);
+      CHECK(er < 0.01);
+      REQUIRE(update.key_frame);
+      // Only voxel centroids are offered, each stored unless the map had a point within eps_D.
+      CHECK(update.inserted.offered == filtered.size());
+    }
+    sizes.push_back(mapper.map().size());
+  }
+  // Eq. (5) by brute force: a point stored by one key frame has no point of an earlier key
+  // frame within eps_D.
+  const auto& pts = mapper.map().points();
+  for (std::size_t f = 2; f < sizes.size(); ++f)
+    for (std::size_t a = sizes[f - 1]; a < sizes[f]; ++a)
+      for (std::size_t b = 0; b < sizes[f - 1]; ++b)
+        REQUIRE((pts[a] - pts[b]).norm() >= 0.1);
+  // Smaller than one of the eight clouds it was built from.
+  CHECK(mapper.map().size() < world.size());
+}
+
 TEST_CASE("SparsePointMap keeps the normals of its walls", "[mapping]") {
   SparsePointMapParams<double> params;
   params.normals = true;

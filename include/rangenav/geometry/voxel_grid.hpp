@@ -1,12 +1,14 @@
 #pragma once
 // Voxel-grid downsampling (paper 004 §3.2: every key frame is downsampled with a voxel filter
 // before it is aligned): the finite points falling into one cubic voxel of edge `leaf_size` are
-// replaced by their centroid. Sort-based (no hash map): deterministic output ordered by voxel.
+// replaced by their centroid. Deterministic output ordered by voxel key.
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -27,8 +29,19 @@ template <PointCloud C>
   detail::require_positive("voxel_downsample", "leaf_size", leaf_size);
   const std::size_t n = traits::size(cloud);
   constexpr std::int64_t half = std::int64_t(1) << 20;
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keys;
-  keys.reserve(n);
+  // One accumulator per occupied voxel, found by hashing its key; consecutive points (the
+  // pixels along a row of an organised frame) mostly share a voxel, so the last voxel is tried
+  // first. The points of a voxel are summed in input order and the voxels sorted by key, which
+  // keeps the output deterministic (ordered by voxel).
+  struct Voxel {
+    std::uint64_t key;
+    cloud_point_t<C> sum;
+    std::size_t count;
+  };
+  std::vector<Voxel> voxels;
+  std::unordered_map<std::uint64_t, std::uint32_t> slot_of;
+  std::uint64_t last_key = 0;
+  std::uint32_t last_slot = std::numeric_limits<std::uint32_t>::max();
   const Scalar inv = Scalar(1) / leaf_size;
   for (std::size_t i = 0; i < n; ++i) {
     const cloud_point_t<C> p = traits::point(cloud, i);
@@ -43,18 +56,23 @@ template <PointCloud C>
       }
       key = (key << 21) | static_cast<std::uint64_t>(static_cast<std::int64_t>(c) + half);
     }
-    if (inside) keys.emplace_back(key, static_cast<std::uint32_t>(i));
+    if (!inside) continue;
+    if (last_slot == std::numeric_limits<std::uint32_t>::max() || key != last_key) {
+      const auto [it, fresh] = slot_of.try_emplace(key, static_cast<std::uint32_t>(voxels.size()));
+      if (fresh) voxels.push_back({key, cloud_point_t<C>::Zero(), 0});
+      last_key = key;
+      last_slot = it->second;
+    }
+    Voxel& v = voxels[last_slot];
+    v.sum += p;
+    ++v.count;
   }
-  std::sort(keys.begin(), keys.end());
+  std::sort(voxels.begin(), voxels.end(),
+            [](const Voxel& a, const Voxel& b) { return a.key < b.key; });
   std::vector<cloud_point_t<C>> out;
-  for (std::size_t i = 0; i < keys.size();) {
-    cloud_point_t<C> sum = cloud_point_t<C>::Zero();
-    std::size_t j = i;
-    for (; j < keys.size() && keys[j].first == keys[i].first; ++j)
-      sum += cloud_point_t<C>(traits::point(cloud, keys[j].second));
-    out.push_back(sum / static_cast<Scalar>(j - i));
-    i = j;
-  }
+  out.reserve(voxels.size());
+  for (const Voxel& v : voxels)
+    out.push_back(v.sum / static_cast<Scalar>(v.count));
   return out;
 }
 
