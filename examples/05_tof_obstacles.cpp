@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
   const Transform3d extrinsics = camera.camera_to_robot();
   const std::size_t w = raw.width(), h = raw.height();
 
-  DepthImage<double> img = raw, before_jump;
+  DepthImage<double> img = raw, before_jump = raw;  // before_jump: the jump-edge filter's input
   std::vector<double> scratch;
   JumpEdgeFilter<double> jump(raw.intrinsics, raw.kind);
   HeightImageObstacleDetector<double> detector;  // ε_H = 3 cm, corridor [0, 1] m
@@ -164,27 +164,8 @@ int main(int argc, char** argv) {
   // The simulator's truth, for the jump-edge filter's input (the median may carry a mixed value
   // into a neighbour): mixed pixels are those whose reading is far from the true depth of the
   // pixel centre; real edges are correct pixels next to a much deeper neighbour.
-  std::size_t mixed = 0, mixed_removed = 0, edges = 0, edges_kept = 0;
-  for (std::size_t r = 1; r + 1 < h; ++r)
-    for (std::size_t c = 1; c + 1 < w; ++c) {
-      const std::size_t i = r * w + c;
-      const double d = before_jump.depth[i], t = truth[i];
-      if (!DepthImage<double>::is_valid_depth(d) || !std::isfinite(t)) continue;
-      const bool removed = !DepthImage<double>::is_valid_depth(img.depth[i]);
-      const double sigma = camera.params().noise_sigma_0 + camera.params().noise_sigma_2 * t * t;
-      if (std::abs(d - t) > std::max(0.1, 5 * sigma)) {
-        ++mixed;
-        mixed_removed += removed ? 1 : 0;
-        continue;
-      }
-      bool edge = false;
-      for (const std::size_t j : {i - 1, i + 1, i - w, i + w})
-        edge = edge || !(truth[j] < t + 0.3);
-      if (edge) {
-        ++edges;
-        edges_kept += removed ? 0 : 1;
-      }
-    }
+  const auto [mixed, mixed_removed, edges, edges_kept] =
+      camera.score_jump_edges(truth, before_jump, img);
 
   // Fusion with the 2D laser (Fig. 15): both into one obstacle map.
   const LaserScan<double> laser = sim::LaserScanner2D().scan(scene.world, robot, rng);

@@ -138,31 +138,11 @@ TEST_CASE("jump-edge filtering removes the simulator's mixed pixels and keeps re
   DepthImage<double> after = before;
   JumpEdgeFilter<double> filter(raw.intrinsics, raw.kind);
   CHECK(filter.filter(after) > 0);
-  // Truth, for the filter's input (the median may carry a mixed value into a neighbour): a mixed
-  // pixel reads far (> max(10 cm, 5 sigma)) from the true depth of its centre; a real edge pixel
-  // reads its true depth and has a neighbour at least 0.3 m deeper.
-  const std::size_t w = raw.width(), h = raw.height();
-  std::size_t mixed = 0, mixed_removed = 0, edges = 0, edges_kept = 0;
-  for (std::size_t r = 1; r + 1 < h; ++r)
-    for (std::size_t c = 1; c + 1 < w; ++c) {
-      const std::size_t i = r * w + c;
-      const double d = before.depth[i], t = truth[i];
-      if (!DepthImage<double>::is_valid_depth(d) || !std::isfinite(t)) continue;
-      const bool removed = !DepthImage<double>::is_valid_depth(after.depth[i]);
-      const double sigma = camera.params().noise_sigma_0 + camera.params().noise_sigma_2 * t * t;
-      if (std::abs(d - t) > std::max(0.1, 5 * sigma)) {
-        ++mixed;
-        mixed_removed += removed ? 1 : 0;
-        continue;
-      }
-      bool edge = false;
-      for (const std::size_t j : {i - 1, i + 1, i - w, i + w})
-        edge = edge || !(truth[j] < t + 0.3);
-      if (edge) {
-        ++edges;
-        edges_kept += removed ? 0 : 1;
-      }
-    }
+  // Truth (sim::TofCamera::score_jump_edges): a mixed pixel reads far (> max(10 cm, 5 sigma))
+  // from the true depth of its centre; a real edge pixel reads its true depth and has a
+  // neighbour at least 0.3 m deeper.
+  const auto [mixed, mixed_removed, edges, edges_kept] =
+      camera.score_jump_edges(truth, before, after);
   INFO("mixed " << mixed_removed << " / " << mixed << " removed, edges " << edges_kept << " / "
                 << edges << " kept");
   REQUIRE(mixed > 50);

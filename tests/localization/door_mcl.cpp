@@ -1,5 +1,6 @@
 #include "rangenav/localization/door_mcl.hpp"
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
@@ -77,6 +78,22 @@ DetectedMap detected_map(bool alcove) {
   return m;
 }
 
+/// The experiment's sensor and robot (paper 001 §V): a 181-beam laser (1 deg, 30 m) and an
+/// odometry with 3 % scale error, a 0.02 rad/s heading bias and 5 % noise.
+sim::LaserScannerParams corridor_laser_params() {
+  sim::LaserScannerParams lp;
+  lp.geometry = ScanGeometry<double>::from_fov(std::numbers::pi, deg_to_rad(1.0), 0.05, 30.0);
+  return lp;
+}
+sim::DifferentialDriveParams corridor_robot_params() {
+  sim::DifferentialDriveParams rp;
+  rp.odometry.v_scale = 0.03;
+  rp.odometry.omega_bias = 0.02;
+  rp.odometry.v_sigma = 0.05;
+  rp.odometry.omega_sigma = 0.05;
+  return rp;
+}
+
 struct Comparison {
   double mcl_mean{0}, door_mean{0}, door_max{0};
   std::vector<double> door_angles;
@@ -88,14 +105,8 @@ Comparison compare(double opening, std::uint64_t seed, int swing = 1) {
   const sim::Scene scene = sim::office_corridor(std::vector<double>(8, swing * opening));
   const auto doors = corridor_doors(scene.world, swing);
   const OccupancyGrid grid = static_map(doors);
-  sim::LaserScannerParams lp;
-  lp.geometry = ScanGeometry<double>::from_fov(std::numbers::pi, deg_to_rad(1.0), 0.05, 30.0);
-  const sim::LaserScanner2D laser(lp);
-  sim::DifferentialDriveParams rp;
-  rp.odometry.v_scale = 0.03;
-  rp.odometry.omega_bias = 0.02;
-  rp.odometry.v_sigma = 0.05;
-  rp.odometry.omega_sigma = 0.05;
+  const sim::LaserScanner2D laser(corridor_laser_params());
+  const sim::DifferentialDriveParams rp = corridor_robot_params();
   sim::DifferentialDriveRobot robot(rp, {1.0, 1.0, 0.0});
   const OdometryMotionParams motion{0.1, 0.05, 0.1, 0.05};
   MclParams mp;
@@ -196,8 +207,7 @@ TEST_CASE("door mcl: the particle count adapts to the pose uncertainty (KLD)",
   const sim::Scene scene = sim::office_corridor();
   const auto doors = corridor_doors(scene.world);
   const OccupancyGrid grid = static_map(doors);
-  sim::LaserScannerParams lp;
-  lp.geometry = ScanGeometry<double>::from_fov(std::numbers::pi, deg_to_rad(1.0), 0.05, 30.0);
+  const sim::LaserScannerParams lp = corridor_laser_params();
   // The truth and the belief stay inside one KLD bin (0.5 m, 10 deg).
   const Pose2d truth{5.2, 1.2, 0.05};
   std::mt19937_64 sim_rng(3);
@@ -235,14 +245,8 @@ TEST_CASE("door mcl: global localization from a uniform prior over the free cell
   const sim::Scene scene = sim::office_corridor(std::vector<double>(8, deg_to_rad(30.0)), true);
   const auto [grid, doors] = detected_map(true);
   REQUIRE(doors.size() == 8);
-  sim::LaserScannerParams lp;
-  lp.geometry = ScanGeometry<double>::from_fov(std::numbers::pi, deg_to_rad(1.0), 0.05, 30.0);
-  const sim::LaserScanner2D laser(lp);
-  sim::DifferentialDriveParams rp;
-  rp.odometry.v_scale = 0.03;
-  rp.odometry.omega_bias = 0.02;
-  rp.odometry.v_sigma = 0.05;
-  rp.odometry.omega_sigma = 0.05;
+  const sim::LaserScanner2D laser(corridor_laser_params());
+  const sim::DifferentialDriveParams rp = corridor_robot_params();
   for (std::uint64_t seed = 100; seed < 103; ++seed) {
     std::mt19937_64 sim_rng(seed), rng(seed + 1);
     const double start_x = std::uniform_real_distribution<double>(1.0, 6.0)(sim_rng);
@@ -329,6 +333,82 @@ TEST_CASE("door mcl: the door term of the sensor model is Eq. (6) to first order
   // Maximum-likelihood association: near the leaf the door term wins over the empty map.
   CHECK(mcl.end_point_log_likelihood(d.hinge + 0.6 * u, x) >
         mcl.field().log_likelihood_at(d.hinge + 0.6 * u));
+}
+
+TEST_CASE(
+    "door mcl: a particle's scan log-likelihood equals a direct evaluation of Eq. (5)-(6) over "
+    "all beams and doors",
+    "[localization][doors][sim]") {
+  // log_likelihood() skips doors out of reach of a beam's cell and door terms bounded below the
+  // static term; the direct evaluation below tests every door for every beam. Corridor doors
+  // 40 deg open (into the offices and into the corridor), all 181 beams, particles around the
+  // robot and anywhere (end points off the map), door angles anywhere in and beyond the
+  // observed range, variances from 0.
+  for (const int swing : {1, -1}) {
+    const sim::Scene scene = sim::office_corridor(std::vector<double>(8, swing * deg_to_rad(40.0)));
+    const auto doors = corridor_doors(scene.world, swing);
+    const OccupancyGrid grid = static_map(doors);
+    const sim::LaserScanner2D laser(corridor_laser_params());
+    for (const double sigma_hit : {0.2, 0.05}) {
+      DoorAwareMclParams p;
+      p.field.max_beams = 0;
+      p.field.sigma_hit = sigma_hit;
+      const DoorAwareMcl mcl(grid, doors, p);
+      const LikelihoodFieldModel& field = mcl.field();
+      const LikelihoodFieldParams& f = p.field;
+      const auto direct = [&](const DoorAwareState& x, const DoorAwareObservation& z) {
+        double sum = 0;
+        for (const Eigen::Vector2f& q : z.end_points) {
+          const Point2d e = x.pose.transform_point(q.cast<double>());
+          double best = field.log_likelihood_at(e);
+          for (std::size_t k = 0; k < doors.size(); ++k) {
+            const DoorModel& d = doors[k];
+            if ((e - d.hinge).norm() > d.leaf_length + 3 * f.sigma_hit) continue;
+            const double a = d.reference_angle + x.doors[k].mean;
+            const Point2d u(std::cos(a), std::sin(a));
+            const double t = std::clamp((e - d.hinge).dot(u), 0.0, d.leaf_length);
+            const double dist = (e - d.hinge - t * u).norm();
+            const double var = f.sigma_hit * f.sigma_hit + t * t * x.doors[k].variance;
+            best = std::max(best, std::log(f.z_hit * std::exp(-0.5 * dist * dist / var) /
+                                               std::sqrt(2 * std::numbers::pi * var) +
+                                           f.z_rand / f.range_max));
+          }
+          sum += best;
+        }
+        return sum;
+      };
+      std::mt19937_64 rng(5);
+      std::normal_distribution<double> near(0.0, 0.3);
+      std::uniform_real_distribution<double> ux(-3.0, 23.0), uy(-6.0, 8.0), uth(-3.2, 3.2),
+          angle(-0.3, 1.9), variance(0.0, 0.3);
+      int door_wins = 0, off_map = 0;
+      for (const double robot_x : {2.0, 6.3, 10.1, 14.7, 18.5}) {
+        const Pose2d truth{robot_x, 1.0, 0.0};
+        DoorAwareObservation z;
+        mcl.prepare(laser.scan(scene.world, truth, rng), Pose2d{}, z);
+        REQUIRE(z.end_points.size() > 150);
+        for (int i = 0; i < 300; ++i) {
+          DoorAwareState x;
+          x.pose = i < 200 ? Pose2d{truth.x + near(rng), truth.y + near(rng), near(rng)}
+                           : Pose2d{ux(rng), uy(rng), uth(rng)};
+          for (std::size_t k = 0; k < doors.size(); ++k)
+            x.doors[k] = {i % 3 == 0 ? 0.0 : angle(rng), i % 5 == 0 ? 0.0 : variance(rng)};
+          const double expected = direct(x, z);
+          CHECK(mcl.log_likelihood(x, z) == Approx(expected).margin(1e-9).epsilon(0));
+          double static_only = 0;
+          for (const Eigen::Vector2f& q : z.end_points) {
+            const Point2d e = x.pose.transform_point(q.cast<double>());
+            static_only += field.log_likelihood_at(e);
+            off_map += field.cell_index(e) < 0 ? 1 : 0;
+          }
+          door_wins += expected > static_only + 1e-6 ? 1 : 0;
+        }
+      }
+      // The comparison exercised the door terms and end points off the map.
+      CHECK(door_wins > 500);
+      CHECK(off_map > 1000);
+    }
+  }
 }
 
 TEST_CASE(

@@ -20,12 +20,14 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <boost/geometry.hpp>
 #include <boost/geometry/geometries/linestring.hpp>
 #include <boost/geometry/geometries/point_xy.hpp>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <span>
@@ -113,6 +115,7 @@ class DoorAwareMcl {
     if (doors_.size() > max_tracked_doors)
       detail::throw_invalid_argument("DoorAwareMcl", "doors.size()", doors_.size(),
                                      "must be <= " + std::to_string(max_tracked_doors));
+    build_cell_tables(grid);
   }
 
   [[nodiscard]] const DoorAwareMclParams& params() const { return params_; }
@@ -208,7 +211,7 @@ class DoorAwareMcl {
     const Weigher weigher{this};
     filter_.update(weigher, z);
     for (auto& p : filter_.particles())
-      update_doors(p.state, z);
+      update_doors(p.state, z, segments_);
     const std::size_t target =
         params_.sampling.adapt_particle_count
             ? kld_particle_count(
@@ -281,14 +284,45 @@ class DoorAwareMcl {
     return best;
   }
 
-  /// log p(z | x, doors) of one particle (Eq. 5, ML association per beam, Eq. 6 linearised).
+  /// log p(z | x, doors) of one particle (Eq. 5, ML association per beam, Eq. 6 linearised):
+  /// the sum over the end points of end_point_log_likelihood(), computed with the same
+  /// arithmetic but without the work that cannot change the maximum (see build_cell_tables()):
+  /// only the doors whose leaf can reach the end point's cell are tested, the leaf directions
+  /// are computed once per particle, and a door term whose Gaussian is bounded below the static
+  /// map's term is not evaluated (no exp/log).
   [[nodiscard]] double log_likelihood(const DoorAwareState& x,
                                       const DoorAwareObservation& z) const {
     const double c = std::cos(x.pose.theta), s = std::sin(x.pose.theta);
+    const double sigma_sq = params_.field.sigma_hit * params_.field.sigma_hit;
+    const double z_rand = params_.field.z_rand / params_.field.range_max;
+    std::array<Point2d, max_tracked_doors> dir;
+    for (std::size_t k = 0; k < doors_.size(); ++k) {
+      const double a = doors_[k].reference_angle + x.doors[k].mean;
+      dir[k] = Point2d(std::cos(a), std::sin(a));
+    }
     double sum = 0;
-    for (const Eigen::Vector2f& q : z.end_points)
-      sum += end_point_log_likelihood(
-          Point2d(x.pose.x + c * q.x() - s * q.y(), x.pose.y + s * q.x() + c * q.y()), x);
+    for (const Eigen::Vector2f& q : z.end_points) {
+      const Point2d e(x.pose.x + c * q.x() - s * q.y(), x.pose.y + s * q.x() + c * q.y());
+      const std::ptrdiff_t i = field_.cell_index(e);
+      double best = field_.log_likelihood_of_cell(i);
+      const auto cell = i < 0 ? off_map_cell_ : cells_[static_cast<std::size_t>(i)];
+      for (std::uint32_t mask = cell.doors; mask != 0; mask &= mask - 1) {
+        const auto k = static_cast<std::size_t>(std::countr_zero(mask));
+        const DoorModel& d = doors_[k];
+        const Point2d r = e - d.hinge;
+        const double reach = d.leaf_length + 3 * params_.field.sigma_hit;
+        if (r.squaredNorm() > reach * reach) continue;
+        const double t = std::clamp(r.dot(dir[k]), 0.0, d.leaf_length);
+        const double dist_sq = (r - t * dir[k]).squaredNorm();
+        const double var = sigma_sq + t * t * x.doors[k].variance;
+        if (0.5 * dist_sq > cell.max_exponent * var) continue;  // cannot beat `best`
+        const double p = params_.field.z_hit * std::exp(-0.5 * dist_sq / var) /
+                             std::sqrt(2 * std::numbers::pi * var) +
+                         z_rand;
+        best = std::max(best, std::log(p));
+      }
+      sum += best;
+    }
     return sum;
   }
 
@@ -309,23 +343,92 @@ class DoorAwareMcl {
     }
   }
 
+  /// Per grid cell: the doors whose leaf term end_point_log_likelihood() can evaluate for an
+  /// end point in the cell, and the largest exponent 0.5 d^2 / var with which a door's term can
+  /// still exceed the cell's static term.
+  struct CellDoors {
+    std::uint32_t doors{0};  ///< bit k: door k's reach (leaf + 3 sigma_hit) meets the cell
+    float max_exponent{std::numeric_limits<float>::infinity()};  ///< rounded up
+  };
+
+  /// Precomputes CellDoors over the grid (and for end points off the map). Both are exact
+  /// bounds, not approximations: the reach test is the one end_point_log_likelihood() makes,
+  /// widened to the whole cell, and with var >= sigma_hit^2 a door term
+  /// z_hit exp(-q) / sqrt(2 pi var) + z_rand / z_max (q = 0.5 d^2 / var) is at most
+  /// z_hit exp(-q) / (sigma_hit sqrt(2 pi)) + z_rand / z_max, which stays below the static term
+  /// exp(best) (by a relative 1e-12, far above the rounding of exp and log) once
+  /// q > -log((exp(best) (1 - 1e-12) - z_rand / z_max) / z_hit * sigma_hit sqrt(2 pi)):
+  /// log(p) < best then, and max(best, log(p)) is best.
+  void build_cell_tables(const OccupancyGrid& grid) {
+    const double s = params_.field.sigma_hit;
+    const double z_rand = params_.field.z_rand / params_.field.range_max;
+    const auto max_exponent = [&](double best) {
+      constexpr float never = std::numeric_limits<float>::infinity();
+      if (!(params_.field.z_hit > 0)) return never;
+      const double g = (std::exp(best) * (1 - 1e-12) - z_rand) / params_.field.z_hit;
+      if (!(g > 0)) return never;
+      const double q = -std::log(g * s * std::sqrt(2 * std::numbers::pi));
+      // A margin over the rounding of q and of the test's product; the float is rounded up.
+      const double bound = q + 1e-9 * (1 + std::abs(q));
+      const auto f = static_cast<float>(bound);
+      return double(f) >= bound ? f : std::nextafter(f, std::numeric_limits<float>::infinity());
+    };
+    const auto reach_of = [&](const DoorModel& d) {
+      return d.leaf_length + 3 * params_.field.sigma_hit + 1e-9;
+    };
+    const double res = grid.resolution();
+    cells_.assign(grid.cell_count(), CellDoors{});
+    for (int y = 0; y < grid.height(); ++y)
+      for (int x = 0; x < grid.width(); ++x) {
+        const std::size_t i = grid.linear({x, y});
+        const Point2d lo(grid.origin().x() + x * res, grid.origin().y() + y * res);
+        const Point2d hi = lo + Point2d(res, res);
+        for (std::size_t k = 0; k < doors_.size(); ++k) {
+          // Distance from the hinge to the cell's square.
+          const Point2d& h = doors_[k].hinge;
+          const Point2d gap = (lo - h).cwiseMax(h - hi).cwiseMax(0.0);
+          if (gap.norm() <= reach_of(doors_[k])) cells_[i].doors |= std::uint32_t{1} << k;
+        }
+        if (cells_[i].doors != 0)
+          cells_[i].max_exponent =
+              max_exponent(field_.log_likelihood_of_cell(static_cast<std::ptrdiff_t>(i)));
+      }
+    off_map_cell_.doors = doors_.empty() ? 0 : (std::uint32_t{1} << doors_.size()) - 1;
+    off_map_cell_.max_exponent = max_exponent(field_.log_likelihood_of_cell(-1));
+  }
+
   /// Step 3: a measured angle per door from the scan's segments seen from the particle's pose,
-  /// fused by a linear Kalman filter (H = 1).
-  void update_doors(DoorAwareState& x, const DoorAwareObservation& z) const {
+  /// fused by a linear Kalman filter (H = 1). The segments are transformed once per particle;
+  /// a segment is tested against a door only when its bounding box, widened by the largest
+  /// distance from the hinge either test below accepts (an end within hinge_tolerance; a line
+  /// within hinge_line_distance of the hinge whose segment starts within 0.1 leaf lengths of
+  /// it), holds the hinge: the other segments fail both tests, so the result is the same.
+  void update_doors(DoorAwareState& x, const DoorAwareObservation& z,
+                    std::vector<std::pair<Point2d, Point2d>>& segments) const {
     const double c = std::cos(x.pose.theta), s = std::sin(x.pose.theta);
     const auto to_map = [&](const Point2d& q) {
       return Point2d(x.pose.x + c * q.x() - s * q.y(), x.pose.y + s * q.x() + c * q.y());
     };
+    segments.clear();
+    for (const auto& [qa, qb] : z.segments)
+      segments.emplace_back(to_map(qa), to_map(qb));
     const double r_var = params_.angle_sigma * params_.angle_sigma;
     const double hinge_sq = params_.hinge_tolerance * params_.hinge_tolerance;
     for (std::size_t k = 0; k < doors_.size(); ++k) {
       const DoorModel& d = doors_[k];
       const double lo = d.opening_min - params_.range_margin;
       const double hi = d.opening_max + params_.range_margin;
+      const double box =
+          std::max(params_.hinge_tolerance, params_.hinge_line_distance + 0.1 * d.leaf_length) +
+          1e-3;
       bool found = false;
       double measured = 0, fallback = 0, fallback_length = 0;
-      for (const auto& [qa, qb] : z.segments) {
-        const Point2d a = to_map(qa), b = to_map(qb);
+      for (const auto& [a, b] : segments) {
+        if (d.hinge.x() < std::min(a.x(), b.x()) - box ||
+            d.hinge.x() > std::max(a.x(), b.x()) + box ||
+            d.hinge.y() < std::min(a.y(), b.y()) - box ||
+            d.hinge.y() > std::max(a.y(), b.y()) + box)
+          continue;
         const double da = (a - d.hinge).squaredNorm(), db = (b - d.hinge).squaredNorm();
         const Point2d far = da < db ? b : a;
         const double length = (b - a).norm();
@@ -382,6 +485,9 @@ class DoorAwareMcl {
   ParticleFilter<DoorAwareState> filter_;
   std::vector<DoorAwareState> states_;
   std::vector<std::pair<std::uint64_t, double>> bins_;  ///< scratch for the KLD count
+  std::vector<CellDoors> cells_;                        ///< per grid cell (build_cell_tables)
+  CellDoors off_map_cell_;                              ///< for end points off the grid
+  std::vector<std::pair<Point2d, Point2d>> segments_;   ///< scratch: a particle's segments
 };
 
 }  // namespace rangenav

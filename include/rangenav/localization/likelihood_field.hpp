@@ -181,7 +181,14 @@ class LikelihoodFieldModel {
   }
   /// log p(z_j | x, m) of an end point given in the map frame.
   [[nodiscard]] double log_likelihood_at(const Point2d& p) const {
-    const auto i = index_of(p.x(), p.y());
+    return log_likelihood_of_cell(index_of(p.x(), p.y()));
+  }
+
+  /// Row-major index of the cell holding p (the cell log_likelihood_at() reads), -1 off the map.
+  [[nodiscard]] std::ptrdiff_t cell_index(const Point2d& p) const { return index_of(p.x(), p.y()); }
+  /// log p(z_j | x, m) of an end point in cell i (cell_index(); -1: off the map), the same value
+  /// as log_likelihood_at().
+  [[nodiscard]] double log_likelihood_of_cell(std::ptrdiff_t i) const {
     return i < 0 ? double(off_map_) : double(log_p_[static_cast<std::size_t>(i)]);
   }
 

@@ -228,26 +228,14 @@ class DoorDetector {
   /// length to the persistent set, then re-detects the doors (step 4). Returns the number of
   /// line objects found in this scan.
   std::size_t add(const ScanClassification& c) {
-    std::size_t found = 0;
-    for (const auto* set : {&c.dynamic_points, &c.vanished_points}) {
-      extract_lines(*set, lines_);
-      found += lines_.size();
-      for (const auto& line : lines_)
-        add_leaf(line);
-    }
+    const std::size_t found = add_leaves(c);
     detect();
     return found;
   }
   /// add() whose door detection also requires every hinge to be held by the static `grid`
   /// (DoorDetectionParams::hinge_support_radius); pass the grid the classification came from.
   std::size_t add(const ScanClassification& c, const OccupancyGrid& grid) {
-    std::size_t found = 0;
-    for (const auto* set : {&c.dynamic_points, &c.vanished_points}) {
-      extract_lines(*set, lines_);
-      found += lines_.size();
-      for (const auto& line : lines_)
-        add_leaf(line);
-    }
+    const std::size_t found = add_leaves(c);
     detect(&grid);
     return found;
   }
@@ -304,6 +292,18 @@ class DoorDetector {
   void remove_doors(OccupancyGrid& grid) const { rangenav::remove_doors(grid, doors_); }
 
  private:
+  /// Steps 1-3 for one scan: lines from both sets of dynamic points, leaves of door length kept.
+  std::size_t add_leaves(const ScanClassification& c) {
+    std::size_t found = 0;
+    for (const auto* set : {&c.dynamic_points, &c.vanished_points}) {
+      extract_lines(*set, lines_);
+      found += lines_.size();
+      for (const auto& line : lines_)
+        add_leaf(line);
+    }
+    return found;
+  }
+
   /// An occupied cell of `grid` within hinge_support_radius of `hinge`.
   [[nodiscard]] bool held_by(const OccupancyGrid& grid, const Point2d& hinge) const {
     const double r = params_.hinge_support_radius;

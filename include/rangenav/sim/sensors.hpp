@@ -378,6 +378,48 @@ class TofCamera {
     return image;
   }
 
+  /// How a jump-edge filter did on this camera's frame, judged by the truth (`true_depth()`):
+  /// on the filter's input `before` (the median may carry a mixed value into a neighbour), a
+  /// mixed pixel reads farther than max(10 cm, 5 sigma(d)) from the true depth of its centre; a
+  /// real edge pixel reads its true depth and has a 4-neighbour at least `edge_step` deeper (or
+  /// without a return). `after` is the filter's output; border pixels are not judged.
+  struct JumpEdgeScore {
+    std::size_t mixed = 0, mixed_removed = 0, edges = 0, edges_kept = 0;
+  };
+  [[nodiscard]] JumpEdgeScore score_jump_edges(const std::vector<double>& truth,
+                                               const DepthImage<double>& before,
+                                               const DepthImage<double>& after,
+                                               double edge_step = 0.3) const {
+    constexpr std::string_view where = "TofCamera::score_jump_edges";
+    const std::size_t w = before.width(), h = before.height();
+    if (w * h == 0 || before.depth.size() != w * h || truth.size() != w * h ||
+        after.depth.size() != w * h)
+      detail::throw_invalid(where, "truth, before and after must be frames of the same size");
+    JumpEdgeScore s;
+    const auto valid = [](double d) { return DepthImage<double>::is_valid_depth(d); };
+    for (std::size_t r = 1; r + 1 < h; ++r)
+      for (std::size_t c = 1; c + 1 < w; ++c) {
+        const std::size_t i = r * w + c;
+        const double d = before.depth[i], t = truth[i];
+        if (!valid(d) || !std::isfinite(t)) continue;
+        const bool removed = !valid(after.depth[i]);
+        const double sigma = params_.noise_sigma_0 + params_.noise_sigma_2 * t * t;
+        if (std::abs(d - t) > std::max(0.1, 5 * sigma)) {
+          ++s.mixed;
+          s.mixed_removed += removed ? 1 : 0;
+          continue;
+        }
+        bool edge = false;
+        for (const std::size_t j : {i - 1, i + 1, i - w, i + w})
+          edge = edge || !(truth[j] < t + edge_step);
+        if (edge) {
+          ++s.edges;
+          s.edges_kept += removed ? 0 : 1;
+        }
+      }
+    return s;
+  }
+
  private:
   /// Distance along the ray through (u, v), or inf.
   [[nodiscard]] double cast(const World& world, const Transform3d& t, double u, double v) const {
