@@ -334,21 +334,17 @@ int main(int argc, char** argv) {
     params.extraction_leaf = 0.0;  // the full-resolution frame (organised: image neighbours)
     params.organized_clustering = !kd_clustering;
     params.point_map_downsampled = !full_res_point_map;
-    // Registration at high sensor noise. A 5 cm voxel filter does not average a surface's range
-    // noise away at sigma = 0.02 m: the noise band (+-2.5 sigma = 10 cm) spreads over two or three
-    // voxel layers, each voxel's centroid stays in its layer, and every sparsely hit tail voxel
-    // adds one centroid far off the surface -- more of them the denser the frame (measured at
-    // sigma 0.02 under the true pose: voxel centroids 26-38 mm RMS from the true planes, 7,400
-    // centroids per 640 x 480 frame against 4,500 per 160 x 120 frame; 60 % of the map's PCA
-    // normals failed the flatness test at 640 x 480 against 37 % at 160 x 120, and 30 % of the rest
-    // were more than 10 deg off). So the leaf grows with the noise (5 sigma: the band falls in
-    // about one voxel layer), and the normals' PCA takes 30 neighbours instead of 10 so that it
-    // spans a surface patch several times wider than the map's remaining thickness. At sigma 0.02,
-    // 640 x 480: mean key-frame error 432 -> 12 mm (seed 42), 815 -> 17 mm (seed 1), 178 -> 17 mm
-    // (seed 7); the leaf alone gave 15 mm, the 30 neighbours alone 44 mm. Below sigma = 0.01 m
-    // the defaults stay (30 neighbours there cost 2.1 -> 5.0 mm at sigma 0).
-    params.voxel_leaf = std::max(0.05, 5 * run.sigma);
-    if (run.sigma > 0.01) params.normal_neighbors = 30;
+    // Registration at high sensor noise: a 5 cm voxel filter does not average 2 cm noise away
+    // (the noise band spreads over two or three voxel layers, each voxel's centroid stays in its
+    // layer), so the mapper takes the sensor's noise and widens its voxel leaf to 5 sigma and,
+    // above 1 cm, its normals' PCA to 30 neighbours (GeometricMapperParams::range_noise). Measured
+    // here at sigma 0.02, 640 x 480, under the true pose: voxel centroids 26-38 mm RMS from the
+    // true planes, 7,400 centroids per 640 x 480 frame against 4,500 per 160 x 120 frame; 60 % of
+    // the map's PCA normals failed the flatness test at 640 x 480 against 37 % at 160 x 120, and 30
+    // % of the rest were more than 10 deg off. Mean key-frame error 432 -> 12 mm (seed 42), 815 ->
+    // 17 mm (seed 1), 178 -> 17 mm (seed 7); the leaf alone gave 15 mm, the 30 neighbours alone
+    // 44 mm.
+    params.range_noise = run.sigma;
     GeometricMapper mapper(params);
 
     // Back and forth along the kitchen, turning the camera from side to side; the odometry

@@ -226,6 +226,40 @@ TEST_CASE("GeometricMapper rejects a frame that does not fit the map and bad par
                     "[0, 1]");
 }
 
+TEST_CASE("GeometricMapper adapts its registration to the sensor's range noise", "[mapping]") {
+  GeometricMapperParams p;  // voxel_leaf 0.05 m, 10 normal neighbours
+  CHECK(p.registration_voxel_leaf() == 0.05);
+  CHECK(p.registration_normal_neighbors() == 10);
+  p.range_noise = 0.005;  // the band +-2.5 sigma fits in one 5 cm layer: nothing changes
+  CHECK(p.registration_voxel_leaf() == 0.05);
+  CHECK(p.registration_normal_neighbors() == 10);
+  p.range_noise = 0.02;
+  CHECK(p.registration_voxel_leaf() == Approx(0.1));
+  CHECK(p.registration_normal_neighbors() == 30);
+  p.normal_neighbors = 40;
+  CHECK(p.registration_normal_neighbors() == 40);
+
+  // The first key frame's point map is the frame voxel-filtered at the adapted leaf.
+  const sim::Scene scene = sim::kitchen();
+  const sim::TofCamera camera = kitchen_camera();
+  std::mt19937 rng(1);
+  const Pose2d robot{3.8, 2.0, std::numbers::pi};
+  const auto cloud = to_organized_cloud(camera.capture(scene.world, robot, rng));
+  auto params = kitchen_params();
+  params.range_noise = 0.02;
+  GeometricMapper mapper(params);
+  REQUIRE(mapper.process(cloud, sim::robot_transform(robot) * camera.camera_to_robot(), rng)
+              .registered);
+  CHECK(mapper.point_map().size() == voxel_downsample(cloud, 0.1).size());
+  CHECK(mapper.point_map().size() < voxel_downsample(cloud, params.voxel_leaf).size());
+
+  params.range_noise = -0.01;
+  CHECK_THROWS_WITH(
+      GeometricMapper(params),
+      Catch::Matchers::Equals("rangenav: GeometricMapper: argument "
+                              "'params.range_noise' = -0.01 must be finite and >= 0"));
+}
+
 TEST_CASE("GeometricMapper merges the floor of MRPT's four RGB-D frames into one polygon",
           "[mapping]") {
   // Issue 9's real-data check: four organised 160 x 120 frames with camera poses; the floor,
