@@ -180,6 +180,59 @@ TEST_CASE("organized_euclidean_clusters equals kd-tree clustering on an organise
       "and > 0");
 }
 
+TEST_CASE("organized_euclidean_clusters equals brute-force 8-neighbour components", "[geometry]") {
+  // Reference: every 8-neighbour pair of finite points closer than the tolerance united, clusters
+  // in increasing index order, ordered by size (ties: smallest first index). The row-run
+  // implementation skips diagonal tests that a two-link path already covers; jittered samples
+  // at a tolerance near the pixel pitch make many links (diagonals alone, too) come and go.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (int trial = 0; trial < 40; ++trial) {
+    const std::size_t width = 5 + rng() % 40, height = 2 + rng() % 30;
+    const double jitter = 0.001 * double(trial % 5), tol = 0.009 + 0.0007 * double(trial % 9);
+    std::vector<Point3d> pts;
+    for (std::size_t r = 0; r < height; ++r)
+      for (std::size_t c = 0; c < width; ++c) {
+        Point3d p(0.01 * double(c) + jitter * (u(rng) - 0.5),
+                  0.01 * double(r) + jitter * (u(rng) - 0.5), (u(rng) < 0.05 ? 0.5 : 0.0));
+        const double x = u(rng);
+        if (x < 0.08) p = Point3d::Constant(nan);
+        if (x > 0.98) p.y() = inf;
+        pts.push_back(p);
+      }
+    std::vector<std::size_t> parent(pts.size());
+    std::iota(parent.begin(), parent.end(), std::size_t{0});
+    const auto ok = [&](std::size_t i) { return pts[i].allFinite(); };
+    for (std::size_t r = 0; r < height; ++r)
+      for (std::size_t c = 0; c < width; ++c)
+        for (int dr = -1; dr <= 1; ++dr)
+          for (int dc = -1; dc <= 1; ++dc) {
+            const auto rr = static_cast<std::ptrdiff_t>(r) + dr;
+            const auto cc = static_cast<std::ptrdiff_t>(c) + dc;
+            if (rr < 0 || cc < 0 || rr >= std::ptrdiff_t(height) || cc >= std::ptrdiff_t(width))
+              continue;
+            const std::size_t i = r * width + c, j = std::size_t(rr) * width + std::size_t(cc);
+            if (ok(i) && ok(j) && (pts[i] - pts[j]).squaredNorm() < tol * tol) {
+              const std::size_t a = find_root(parent, i), b = find_root(parent, j);
+              parent[std::max(a, b)] = std::min(a, b);
+            }
+          }
+    for (const std::size_t min_size : {std::size_t{1}, std::size_t{3}}) {
+      std::vector<std::vector<std::uint32_t>> by_root(pts.size()), reference;
+      for (std::size_t i = 0; i < pts.size(); ++i)
+        if (ok(i)) by_root[find_root(parent, i)].push_back(static_cast<std::uint32_t>(i));
+      for (auto& cl : by_root)
+        if (cl.size() >= min_size && cl.size() <= 200) reference.push_back(cl);
+      std::stable_sort(reference.begin(), reference.end(),
+                       [](const auto& a, const auto& b) { return a.size() > b.size(); });
+      CHECK(organized_euclidean_clusters(std::span<const Point3d>(pts), width, height,
+                                         {tol, min_size, 200}) == reference);
+    }
+  }
+}
+
 // ---- concave hull -------------------------------------------------------------------------
 
 namespace {

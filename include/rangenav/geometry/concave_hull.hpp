@@ -103,14 +103,24 @@ class ConcaveHull {
     const std::size_t n = traits::size(cloud);
     const double inv = 1.0 / grid.resolution;
     snapped_.resize(n);
+    cell_type lo{std::numeric_limits<std::int32_t>::max(),
+                 std::numeric_limits<std::int32_t>::max()};
+    cell_type hi{std::numeric_limits<std::int32_t>::min(),
+                 std::numeric_limits<std::int32_t>::min()};
     for (std::size_t i = 0; i < n; ++i) {
       const Point2d p = traits::point(cloud, i).template cast<double>();
       const double gx = p.x() * inv, gy = p.y() * inv;
-      if (std::abs(gx) <= IntegerGrid::limit && std::abs(gy) <= IntegerGrid::limit)
-        snapped_[i] = {round_half_away(gx), round_half_away(gy)};
+      cell_type g;
+      if (std::abs(gx) <= IntegerGrid::limit && std::abs(gy) <= IntegerGrid::limit) [[likely]]
+        g = {round_half_away(gx), round_half_away(gy)};
       else  // NaN or out of range: the grid names the point in its message
-        snapped_[i] = grid.snap(p, where, "cloud[" + std::to_string(i) + "]");
+        g = grid.snap(p, where, "cloud[" + std::to_string(i) + "]");
+      snapped_[i] = g;
+      lo = {std::min(lo[0], g[0]), std::min(lo[1], g[1])};
+      hi = {std::max(hi[0], g[0]), std::max(hi[1], g[1])};
     }
+    lo_ = lo;
+    hi_ = hi;
     select_sites();
     auto result = build(grid);
     if (piece_of_point) {  // per site, then per point through its site (a thinned point: its
@@ -150,19 +160,16 @@ class ConcaveHull {
     const double cell_steps = std::floor(params_.thinning * params_.alpha / params_.resolution);
     if (!(cell_steps >= 2) || n < 64) return keep_all();
     const auto k = static_cast<std::int64_t>(std::min(cell_steps, IntegerGrid::limit));
-    const auto k32 = static_cast<std::int32_t>(k);
-    const auto cell_of = [k32](std::int32_t v) -> std::int64_t {  // floor division
-      const std::int32_t q = v / k32;
-      return (q * k32 != v && v < 0) ? q - 1 : q;
+    // Floor division by k through a multiplication by 1 / k (an integer division per point
+    // costs more than the rest of the pass), corrected by one step where rounding misses.
+    const double inv_k = 1.0 / double(k);
+    const auto cell_of = [k, inv_k](std::int32_t v) -> std::int64_t {
+      auto q = static_cast<std::int64_t>(std::floor(double(v) * inv_k));
+      q += (q + 1) * k <= v ? 1 : 0;
+      q -= q * k > v ? 1 : 0;
+      return q;
     };
-    std::int32_t gx0 = std::numeric_limits<std::int32_t>::max(), gy0 = gx0;
-    std::int32_t gx1 = std::numeric_limits<std::int32_t>::min(), gy1 = gx1;
-    for (const cell_type& g : snapped_) {
-      gx0 = std::min(gx0, g[0]);
-      gx1 = std::max(gx1, g[0]);
-      gy0 = std::min(gy0, g[1]);
-      gy1 = std::max(gy1, g[1]);
-    }
+    const std::int32_t gx0 = lo_[0], gy0 = lo_[1], gx1 = hi_[0], gy1 = hi_[1];
     const std::int64_t x0 = cell_of(gx0), x1 = cell_of(gx1);  // floor division is monotonic
     const std::int64_t y0 = cell_of(gy0), y1 = cell_of(gy1);
     // A dense cell array with a margin of one empty cell on each side; skipped (no thinning)
@@ -399,11 +406,12 @@ class ConcaveHull {
     return result;
   }
 
-  /// std::round for |v| <= IntegerGrid::limit, without the library call.
+  /// std::round for |v| <= IntegerGrid::limit, without the library call or a branch (the
+  /// fraction's comparisons are random, so a branch is mispredicted half of the time).
   static std::int32_t round_half_away(double v) {
     const auto t = static_cast<std::int32_t>(v);  // towards zero
     const double frac = v - double(t);
-    return frac >= 0.5 ? t + 1 : frac <= -0.5 ? t - 1 : t;
+    return t + static_cast<std::int32_t>(frac >= 0.5) - static_cast<std::int32_t>(frac <= -0.5);
   }
 
   /// Union-find root with path halving.
@@ -471,6 +479,7 @@ class ConcaveHull {
 
   ConcaveHullParams params_;
   std::vector<cell_type> snapped_;             // per input point: its grid point
+  cell_type lo_{}, hi_{};                      // bounding box of snapped_
   std::vector<std::uint32_t> representative_;  // per input point: see select_sites
   std::vector<std::uint32_t> cell_slot_;       // thinning cells: see select_sites
   std::vector<std::uint8_t> mask_;             // per boundary cell: its empty neighbours

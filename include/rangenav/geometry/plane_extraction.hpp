@@ -124,21 +124,25 @@ class PlaneExtractor {
   template <class Engine>
   std::size_t extract(std::span<const Point3d> points, std::span<const std::uint32_t> cluster,
                       Engine& rng, std::vector<ExtractedPlane>& out) {
-    remaining_.clear();
+    // The cluster's finite points are copied into remaining_ (contiguous, in cluster order):
+    // every pass below reads and partitions them there instead of gathering through indices.
+    remaining_.resize(cluster.size());
+    std::size_t kept = 0;
     for (const std::uint32_t i : cluster) {
       if (i >= points.size())
         detail::throw_invalid_argument(
             "PlaneExtractor::extract", "cluster index", i,
             "must be < points.size() = " + std::to_string(points.size()));
       const Point3d& p = points[i];
-      if (std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()))
-        remaining_.push_back(i);
+      remaining_[kept] = p;
+      kept += std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()) ? 1 : 0;
     }
+    remaining_.resize(kept);
     const std::size_t min_remaining = std::max<std::size_t>(
         3, params_.min_remaining != 0 ? params_.min_remaining : params_.min_inliers);
     const std::size_t before = out.size();
     while (remaining_.size() >= min_remaining) {
-      const std::optional<Plane3<double>> hypothesis = ransac(points, rng);
+      const std::optional<Plane3<double>> hypothesis = ransac(rng);
       if (!hypothesis) break;
       // Two rounds. 1: the inliers of the RANSAC plane -> their largest connected piece -> least-
       // squares refit on it (a strip of another surface crossing the band cannot tilt the
@@ -148,17 +152,18 @@ class PlaneExtractor {
       // 8-connected groups of occupied cells of alpha / 2 (points of neighbouring cells are at
       // most 1.4 alpha apart, where the alpha shape joins points up to 2 alpha apart), which
       // is much cheaper than a triangulation and only decides what the refit sees.
+      // The RANSAC plane's inliers (the verification count on the whole cluster: too few, no
+      // plane) moved to the front.
       Plane3<double> plane = *hypothesis;
-      std::size_t surface = largest_cell_piece(points, split_inliers(points, plane), plane);
+      const double cells = 2.0 / params_.hull.alpha;  // round 1's cells of alpha / 2
+      std::size_t surface = split_inliers(plane, PlaneFrame<double>::of(plane), cells);
       if (surface < params_.min_inliers) break;
-      if (const auto refit = fit_least_squares(points, surface, plane);
-          refit && admissible(refit->normal))
+      surface = largest_cell_piece(surface);
+      if (surface < params_.min_inliers) break;
+      if (const auto refit = fit_least_squares(surface, plane); refit && admissible(refit->normal))
         plane = *refit;
-      const std::size_t count = split_inliers(points, plane);
       const PlaneFrame<double> hull_frame = PlaneFrame<double>::of(plane);
-      projected_.resize(count);
-      for (std::size_t k = 0; k < count; ++k)
-        projected_[k] = hull_frame.to_plane(points[remaining_[k]]);  // Eq. (1)-(3)
+      const std::size_t count = split_inliers(plane, hull_frame, 1.0);
       std::vector<Polygon2<double>> pieces = hull_.compute(projected_, &piece_);
       surface = 0;  // stable partition: the largest piece's points first
       others_.clear();
@@ -170,12 +175,11 @@ class PlaneExtractor {
       std::copy(others_.begin(), others_.end(),
                 remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
       if (pieces.empty() || surface < params_.min_inliers) break;
-      if (const auto refit = fit_least_squares(points, surface, plane);
-          refit && admissible(refit->normal))
+      if (const auto refit = fit_least_squares(surface, plane); refit && admissible(refit->normal))
         plane = *refit;
       if (params_.viewpoint && plane.signed_distance(*params_.viewpoint) < 0)
         plane = plane.flipped();
-      emit(points, surface, plane, hull_frame, std::move(pieces.front()), out);
+      emit(surface, plane, hull_frame, std::move(pieces.front()), out);
       remaining_.erase(remaining_.begin(),
                        remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
     }
@@ -203,7 +207,7 @@ class PlaneExtractor {
   /// copied into subset_ so that the scoring loop reads contiguous memory); the best is counted
   /// on all of remaining_.
   template <class Engine>
-  std::optional<Plane3<double>> ransac(std::span<const Point3d> points, Engine& rng) {
+  std::optional<Plane3<double>> ransac(Engine& rng) {
     const std::size_t n = remaining_.size();
     std::uniform_int_distribution<std::size_t> pick(0, n - 1);
     const double thr = params_.distance_threshold;
@@ -212,15 +216,15 @@ class PlaneExtractor {
                               : params_.evaluation_subset;
     subset_.resize(m);
     for (std::size_t k = 0; k < m; ++k)
-      subset_[k] = points[remaining_[m == n ? k : pick(rng)]];
+      subset_[k] = remaining_[m == n ? k : pick(rng)];
     std::size_t best_count = 0;
     std::optional<Plane3<double>> best;
     double needed = params_.max_iterations;
     for (int it = 0; it < params_.max_iterations && it < needed; ++it) {
       const std::size_t a = pick(rng), b = pick(rng), c = pick(rng);
       if (a == b || b == c || a == c) continue;
-      const Point3d& p = points[remaining_[a]];
-      const Point3d normal = (points[remaining_[b]] - p).cross(points[remaining_[c]] - p);
+      const Point3d& p = remaining_[a];
+      const Point3d normal = (remaining_[b] - p).cross(remaining_[c] - p);
       const double norm = normal.norm();
       if (!(norm > 1e-12)) continue;  // collinear sample
       const Point3d nn = normal / norm;
@@ -238,28 +242,21 @@ class PlaneExtractor {
         needed = miss <= 0 ? 0 : std::log(1 - params_.confidence) / std::log(miss);
       }
     }
-    if (!best) return std::nullopt;
-    if (m != n) {  // verification on the whole cluster
-      best_count = 0;
-      for (const std::uint32_t i : remaining_)
-        best_count += std::abs(best->signed_distance(points[i])) < thr ? 1 : 0;
-    }
-    if (best_count < params_.min_inliers) return std::nullopt;
+    // The verification on the whole cluster is the caller's split_inliers.
     return best;
   }
 
-  /// Least-squares plane through points[remaining_[0 .. count)]: their centroid and smallest
+  /// Least-squares plane through remaining_[0 .. count): their centroid and smallest
   /// principal axis, on the side of `side`'s normal.
-  std::optional<Plane3<double>> fit_least_squares(std::span<const Point3d> points,
-                                                  std::size_t count,
+  std::optional<Plane3<double>> fit_least_squares(std::size_t count,
                                                   const Plane3<double>& side) const {
     if (count < 3) return std::nullopt;
     // One pass: sums of q = p - p0 and of q q^T (shifted by the first point for precision).
-    const Point3d p0 = points[remaining_[0]];
+    const Point3d p0 = remaining_[0];
     Point3d sum = Point3d::Zero();
     double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
     for (std::size_t k = 0; k < count; ++k) {
-      const Point3d q = points[remaining_[k]] - p0;
+      const Point3d q = remaining_[k] - p0;
       sum += q;
       xx += q.x() * q.x();
       xy += q.x() * q.y();
@@ -282,24 +279,11 @@ class PlaneExtractor {
   }
 
   /// Round 1's piece: moves the points of the largest 8-connected group of occupied cells of
-  /// alpha / 2, among the `count` inliers at the front of remaining_ (projected onto `plane`), to
-  /// the front (stably); returns their count.
-  std::size_t largest_cell_piece(std::span<const Point3d> points, std::size_t count,
-                                 const Plane3<double>& plane) {
+  /// alpha / 2, among the `count` inliers at the front of remaining_ (projected_: their plane
+  /// coordinates in cells, from split_inliers), to the front (stably); returns their count.
+  std::size_t largest_cell_piece(std::size_t count) {
     if (count == 0) return 0;
-    const PlaneFrame<double> frame = PlaneFrame<double>::of(plane);
-    const double inv = 2.0 / params_.hull.alpha;
-    projected_.resize(count);
-    double x0 = std::numeric_limits<double>::max(), y0 = x0;
-    double x1 = std::numeric_limits<double>::lowest(), y1 = x1;
-    for (std::size_t k = 0; k < count; ++k) {
-      const Point2d q = frame.to_plane(points[remaining_[k]]) * inv;  // in cells, Eq. (1)-(3)
-      projected_[k] = q;
-      x0 = std::min(x0, q.x());
-      x1 = std::max(x1, q.x());
-      y0 = std::min(y0, q.y());
-      y1 = std::max(y1, q.y());
-    }
+    double x0 = lo_.x(), y0 = lo_.y(), x1 = hi_.x(), y1 = hi_.y();
     // Cells with a margin of one on each side; a plane too large for a dense grid of a few
     // cells per point is taken as one piece.
     x0 = std::floor(x0) - 1;
@@ -354,28 +338,39 @@ class PlaneExtractor {
     return surface;
   }
 
-  /// Moves the inliers of `plane` to the front of remaining_; returns their count.
-  std::size_t split_inliers(std::span<const Point3d> points, const Plane3<double>& plane) {
+  /// Moves the inliers of `plane` to the front of remaining_ (a stable partition); returns
+  /// their count. projected_ receives the inliers in `frame`'s plane coordinates (Eq. 1-3) times
+  /// `scale`, in order.
+  std::size_t split_inliers(const Plane3<double>& plane, const PlaneFrame<double>& frame,
+                            double scale) {
     const double thr = params_.distance_threshold;
     std::size_t count = 0;  // stable partition through the reused others_ buffer
     others_.clear();
+    projected_.clear();
+    Point2d lo = Point2d::Constant(std::numeric_limits<double>::max()), hi = -lo;
     for (std::size_t k = 0; k < remaining_.size(); ++k) {
-      const std::uint32_t i = remaining_[k];
-      if (std::abs(plane.signed_distance(points[i])) < thr)
-        remaining_[count++] = i;
-      else
-        others_.push_back(i);
+      const Point3d p = remaining_[k];
+      if (std::abs(plane.signed_distance(p)) < thr) {  // |delta| of Eq. (2)
+        remaining_[count++] = p;
+        const Point2d q = frame.to_plane(p) * scale;
+        projected_.push_back(q);
+        lo = lo.cwiseMin(q);
+        hi = hi.cwiseMax(q);
+      } else {
+        others_.push_back(p);
+      }
     }
     std::copy(others_.begin(), others_.end(),
               remaining_.begin() + static_cast<std::ptrdiff_t>(count));
+    lo_ = lo;
+    hi_ = hi;
     return count;
   }
 
-  /// Appends the surface points[remaining_[0 .. count)] on `plane`, its hull `polygon` given in
+  /// Appends the surface remaining_[0 .. count) on `plane`, its hull `polygon` given in
   /// `hull_frame` (the RANSAC plane's) re-expressed in the refitted plane's frame.
-  void emit(std::span<const Point3d> points, std::size_t count, const Plane3<double>& plane,
-            const PlaneFrame<double>& hull_frame, Polygon2<double> polygon,
-            std::vector<ExtractedPlane>& out) const {
+  void emit(std::size_t count, const Plane3<double>& plane, const PlaneFrame<double>& hull_frame,
+            Polygon2<double> polygon, std::vector<ExtractedPlane>& out) const {
     ExtractedPlane e;
     e.shape.plane = plane;
     e.shape.frame = PlaneFrame<double>::of(plane);
@@ -394,7 +389,7 @@ class PlaneExtractor {
     e.shape.polygon = std::move(polygon);
     double sum_sq = 0;
     for (std::size_t k = 0; k < count; ++k) {
-      const double delta = plane.signed_distance(points[remaining_[k]]);  // Eq. (2)
+      const double delta = plane.signed_distance(remaining_[k]);  // Eq. (2)
       sum_sq += delta * delta;
     }
     e.inliers = count;
@@ -404,11 +399,12 @@ class PlaneExtractor {
 
   PlaneExtractionParams params_;
   ConcaveHull hull_;
-  std::vector<std::uint32_t> remaining_;
+  std::vector<Point3d> remaining_;  // the cluster's points not yet in a plane
   std::vector<std::uint32_t> all_;
   std::vector<Point2d> projected_;
+  Point2d lo_, hi_;  // bounding box of projected_
   std::vector<std::int32_t> piece_;
-  std::vector<std::uint32_t> others_;
+  std::vector<Point3d> others_;
   std::vector<Point3d> subset_;
   std::vector<std::uint32_t> cells_;
   std::vector<std::uint32_t> cell_count_;
