@@ -158,24 +158,28 @@ class PlaneExtractor {
       const double cells = 2.0 / params_.hull.alpha;  // round 1's cells of alpha / 2
       std::size_t surface = split_inliers(plane, PlaneFrame<double>::of(plane), cells);
       if (surface < params_.min_inliers) break;
-      surface = largest_cell_piece(surface);
+      Moments moments;
+      surface = largest_cell_piece(surface, moments);
       if (surface < params_.min_inliers) break;
-      if (const auto refit = fit_least_squares(surface, plane); refit && admissible(refit->normal))
+      if (const auto refit = fit_least_squares(moments, plane); refit && admissible(refit->normal))
         plane = *refit;
       const PlaneFrame<double> hull_frame = PlaneFrame<double>::of(plane);
       const std::size_t count = split_inliers(plane, hull_frame, 1.0);
       std::vector<Polygon2<double>> pieces = hull_.compute(projected_, &piece_);
       surface = 0;  // stable partition: the largest piece's points first
       others_.clear();
+      moments = {};
       for (std::size_t k = 0; k < count; ++k)
-        if (piece_[k] == 0)
+        if (piece_[k] == 0) {
+          moments.add(remaining_[k]);
           remaining_[surface++] = remaining_[k];
-        else
+        } else {
           others_.push_back(remaining_[k]);
+        }
       std::copy(others_.begin(), others_.end(),
                 remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
       if (pieces.empty() || surface < params_.min_inliers) break;
-      if (const auto refit = fit_least_squares(surface, plane); refit && admissible(refit->normal))
+      if (const auto refit = fit_least_squares(moments, plane); refit && admissible(refit->normal))
         plane = *refit;
       if (params_.viewpoint && plane.signed_distance(*params_.viewpoint) < 0)
         plane = plane.flipped();
@@ -246,17 +250,15 @@ class PlaneExtractor {
     return best;
   }
 
-  /// Least-squares plane through remaining_[0 .. count): their centroid and smallest
-  /// principal axis, on the side of `side`'s normal.
-  std::optional<Plane3<double>> fit_least_squares(std::size_t count,
-                                                  const Plane3<double>& side) const {
-    if (count < 3) return std::nullopt;
-    // One pass: sums of q = p - p0 and of q q^T (shifted by the first point for precision).
-    const Point3d p0 = remaining_[0];
-    Point3d sum = Point3d::Zero();
+  /// Sums of q = p - p0 and of q q^T over points p, shifted by the first point p0 for
+  /// precision; accumulated while the points are partitioned (no pass of their own).
+  struct Moments {
+    Point3d p0 = Point3d::Zero(), sum = Point3d::Zero();
     double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
-    for (std::size_t k = 0; k < count; ++k) {
-      const Point3d q = remaining_[k] - p0;
+    std::size_t count = 0;
+    void add(const Point3d& p) {
+      if (count++ == 0) p0 = p;
+      const Point3d q = p - p0;
       sum += q;
       xx += q.x() * q.x();
       xy += q.x() * q.y();
@@ -265,12 +267,19 @@ class PlaneExtractor {
       yz += q.y() * q.z();
       zz += q.z() * q.z();
     }
-    const double inv = 1.0 / double(count);
-    const Point3d mean = sum * inv;
-    const Point3d centroid = p0 + mean;
+  };
+
+  /// Least-squares plane of the points summed in `m`: their centroid and smallest principal
+  /// axis, on the side of `side`'s normal.
+  static std::optional<Plane3<double>> fit_least_squares(const Moments& m,
+                                                         const Plane3<double>& side) {
+    if (m.count < 3) return std::nullopt;
+    const double inv = 1.0 / double(m.count);
+    const Point3d mean = m.sum * inv;
+    const Point3d centroid = m.p0 + mean;
     Eigen::Matrix3d cov;  // covariance times count
-    cov << xx, xy, xz, xy, yy, yz, xz, yz, zz;
-    cov.noalias() -= double(count) * mean * mean.transpose();
+    cov << m.xx, m.xy, m.xz, m.xy, m.yy, m.yz, m.xz, m.yz, m.zz;
+    cov.noalias() -= double(m.count) * mean * mean.transpose();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
     Point3d normal = eig.eigenvectors().col(0);
     if (!normal.allFinite() || normal.norm() < 0.5) return std::nullopt;
@@ -281,7 +290,7 @@ class PlaneExtractor {
   /// Round 1's piece: moves the points of the largest 8-connected group of occupied cells of
   /// alpha / 2, among the `count` inliers at the front of remaining_ (projected_: their plane
   /// coordinates in cells, from split_inliers), to the front (stably); returns their count.
-  std::size_t largest_cell_piece(std::size_t count) {
+  std::size_t largest_cell_piece(std::size_t count, Moments& moments) {
     if (count == 0) return 0;
     double x0 = lo_.x(), y0 = lo_.y(), x1 = hi_.x(), y1 = hi_.y();
     // Cells with a margin of one on each side; a plane too large for a dense grid of a few
@@ -289,7 +298,11 @@ class PlaneExtractor {
     x0 = std::floor(x0) - 1;
     y0 = std::floor(y0) - 1;
     const double wd = std::floor(x1) - x0 + 2, hd = std::floor(y1) - y0 + 2;
-    if (!(wd * hd <= 4.0 * double(count) + 4096)) return count;
+    if (!(wd * hd <= 4.0 * double(count) + 4096)) {
+      for (std::size_t k = 0; k < count; ++k)
+        moments.add(remaining_[k]);
+      return count;
+    }
     const auto w = static_cast<std::size_t>(wd), h = static_cast<std::size_t>(hd);
     constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
     cells_.assign(w * h, none);  // union-find parent per occupied cell
@@ -329,9 +342,10 @@ class PlaneExtractor {
     std::size_t surface = 0;  // stable partition
     others_.clear();
     for (std::size_t k = 0; k < count; ++k)
-      if (static_cast<std::uint32_t>(piece_[k]) == best)
+      if (static_cast<std::uint32_t>(piece_[k]) == best) {
+        moments.add(remaining_[k]);
         remaining_[surface++] = remaining_[k];
-      else
+      } else
         others_.push_back(remaining_[k]);
     std::copy(others_.begin(), others_.end(),
               remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
@@ -344,24 +358,35 @@ class PlaneExtractor {
   std::size_t split_inliers(const Plane3<double>& plane, const PlaneFrame<double>& frame,
                             double scale) {
     const double thr = params_.distance_threshold;
-    std::size_t count = 0;  // stable partition through the reused others_ buffer
-    others_.clear();
-    projected_.clear();
+    const std::size_t n = remaining_.size();
+    if (others_.size() < n) others_.resize(n);
+    projected_.resize(n);
+    // Branch-free stable partition (whether a point is an inlier is close to random where the
+    // band crosses noisy surfaces): every point is written to both sides and the side it belongs
+    // to advances. Writes to remaining_ never pass the read position.
+    Point3d* const in = remaining_.data();
+    Point3d* const out = others_.data();
+    Point2d* const proj = projected_.data();
+    std::size_t count = 0, other = 0;
     Point2d lo = Point2d::Constant(std::numeric_limits<double>::max()), hi = -lo;
-    for (std::size_t k = 0; k < remaining_.size(); ++k) {
-      const Point3d p = remaining_[k];
-      if (std::abs(plane.signed_distance(p)) < thr) {  // |delta| of Eq. (2)
-        remaining_[count++] = p;
-        const Point2d q = frame.to_plane(p) * scale;
-        projected_.push_back(q);
-        lo = lo.cwiseMin(q);
-        hi = hi.cwiseMax(q);
-      } else {
-        others_.push_back(p);
-      }
+    // frame.to_plane's first two rows, inlined: x_plane = R (x - o), Eq. (10).
+    const Eigen::Matrix<double, 2, 3> rows = frame.world_to_plane.linear().topRows<2>();
+    const Point2d offset = frame.world_to_plane.translation().head<2>();
+    for (std::size_t k = 0; k < n; ++k) {
+      const Point3d p = in[k];
+      const bool inlier = std::abs(plane.signed_distance(p)) < thr;  // |delta| of Eq. (2)
+      const Point2d q = (rows * p + offset) * scale;
+      in[count] = p;
+      out[other] = p;
+      proj[count] = q;
+      const Point2d box = inlier ? q : lo;  // keeps the box of the inliers only
+      lo = lo.cwiseMin(box);
+      hi = hi.cwiseMax(inlier ? q : hi);
+      count += inlier ? 1 : 0;
+      other += inlier ? 0 : 1;
     }
-    std::copy(others_.begin(), others_.end(),
-              remaining_.begin() + static_cast<std::ptrdiff_t>(count));
+    std::copy(out, out + other, in + count);
+    projected_.resize(count);
     lo_ = lo;
     hi_ = hi;
     return count;
