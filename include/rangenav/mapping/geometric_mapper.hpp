@@ -111,7 +111,8 @@ struct GeometricMapperParams {
   bool organized_clustering = true;
   EuclideanClusteringParams clustering{0.05, 500, std::numeric_limits<std::size_t>::max()};
   PlaneExtractionParams planes{};
-  /// Aggregation: the similarity thresholds t1, t2 of Eq. (6).
+  /// Aggregation: the similarity thresholds t1, t2 of Eq. (6) and where Eq. (6b) compares the
+  /// offsets (at the shapes' centroids by default, at the world origin as in the paper).
   GeometricMapParameters<double> merging{};
 
   void validate(std::string_view where) const {
