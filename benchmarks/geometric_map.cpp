@@ -122,7 +122,8 @@ void BM_plane_extraction(benchmark::State& state) {
   const Frames& f = frames();
   const double leaf = static_cast<double>(state.range(0)) / 1000.0;
   GeometricMapper mapper(params(leaf));
-  std::size_t planes = 0, points = 0;
+  std::size_t planes = 0, points = 0, inliers = 0;
+  double area = 0;
   for (auto _ : state) {
     std::mt19937 rng(7);
     GeometricFrameReport report;
@@ -130,9 +131,17 @@ void BM_plane_extraction(benchmark::State& state) {
     mapper.extract_planes(f.second, report, rng);
     planes = report.planes.size();
     points = report.extraction_points;
+    area = 0;
+    inliers = 0;
+    for (const auto& e : report.planes) {
+      area += e.shape.area();
+      inliers += e.inliers;
+    }
   }
   state.counters["planes"] = static_cast<double>(planes);
   state.counters["points"] = static_cast<double>(points);
+  state.counters["area_m2"] = area;
+  state.counters["inliers"] = static_cast<double>(inliers);
 }
 
 /// The aligned second frame in world coordinates, organised (640 x 480, NaN where no return).

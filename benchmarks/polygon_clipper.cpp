@@ -1,6 +1,8 @@
 // Polygon clipping for the geometric map (paper 004 §3.4): union and intersection test of two
 // overlapping concave 64-vertex polygons with each PolygonClipper backend (Boost.Geometry, and
-// Clipper's Vatti algorithm when RANGENAV_HAVE_CLIPPER), and GeometricMap insertion: the
+// Clipper's Vatti algorithm when RANGENAV_HAVE_CLIPPER), on two pairs: /0 two star polygons whose
+// boundaries cross 86 times, /1 two three-lobed polygons whose boundaries cross twice (the cost
+// of an overlay grows with the crossings, the counter `crossings`); and GeometricMap insertion: the
 // kitchen's five true planes seen in 20 key frames, each view a 64-vertex jagged hull of a random
 // window of the plane, tilted and shifted a little, as plane extraction would deliver them.
 
@@ -8,6 +10,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -39,38 +42,69 @@ Polygon2<> star(Point2d center, int n, double r0, double r1, std::mt19937& rng) 
   return p;
 }
 
+// A concave polygon with n vertices and three lobes around `center`: radius 1 + 0.3 sin(3 a +
+// phase) m at the angle a.
+Polygon2<> lobes(Point2d center, int n, double phase) {
+  Polygon2<> p;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * std::numbers::pi * i / n;
+    const double r = 1 + 0.3 * std::sin(3 * a + phase);
+    p.outer.push_back(center + r * Point2d(std::cos(a), std::sin(a)));
+  }
+  return p;
+}
+
 struct PolygonPair {
   Polygon2<> a, b;
 };
 
-const PolygonPair& concave_pair() {
-  static const PolygonPair pair = [] {
+// Pair 0: the stars (centres 0.67 m apart); pair 1: the lobed polygons (the same offset).
+const PolygonPair& concave_pair(std::int64_t which) {
+  static const PolygonPair stars = [] {
     std::mt19937 rng(64);
     PolygonPair p{star({0, 0}, 64, 0.8, 1.2, rng), star({0.6, 0.3}, 64, 0.8, 1.2, rng)};
     return p;
   }();
-  return pair;
+  static const PolygonPair lobed{lobes({0, 0}, 64, 0), lobes({0.6, 0.3}, 64, 1)};
+  return which == 0 ? stars : lobed;
+}
+
+// Points where the two outer rings cross (Boost.Geometry's intersection of the closed rings as
+// linestrings).
+double crossings(const PolygonPair& pair) {
+  namespace bg = boost::geometry;
+  const auto line = [](const Polygon2<>& p) {
+    bg::model::linestring<rangenav::BoostPoint2<>> l;
+    for (const auto& v : p.outer)
+      l.emplace_back(v.x(), v.y());
+    l.push_back(l.front());
+    return l;
+  };
+  std::vector<rangenav::BoostPoint2<>> points;
+  bg::intersection(line(pair.a), line(pair.b), points);
+  return static_cast<double>(points.size());
 }
 
 template <class Clipper>
 void union_of(benchmark::State& state) {
   const Clipper clipper;
-  const auto& [a, b] = concave_pair();
+  const auto& pair = concave_pair(state.range(0));
   std::size_t vertices = 0;
   for (auto _ : state) {
-    const auto u = clipper.union_of(a, b);
+    const auto u = clipper.union_of(pair.a, pair.b);
     vertices = u.front().outer.size();
     benchmark::DoNotOptimize(vertices);
   }
   state.counters["union_vertices"] = static_cast<double>(vertices);
+  state.counters["crossings"] = crossings(pair);
 }
 
 template <class Clipper>
 void intersects(benchmark::State& state) {
   const Clipper clipper;
-  const auto& [a, b] = concave_pair();
+  const auto& pair = concave_pair(state.range(0));
   for (auto _ : state) {
-    bool hit = clipper.intersects(a, b);
+    bool hit = clipper.intersects(pair.a, pair.b);
     benchmark::DoNotOptimize(hit);
   }
 }
@@ -137,12 +171,21 @@ void map_insert(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK_TEMPLATE(union_of, rangenav::BoostGeometryClipper)->Unit(benchmark::kMicrosecond);
-BENCHMARK_TEMPLATE(intersects, rangenav::BoostGeometryClipper)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(union_of, rangenav::BoostGeometryClipper)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(intersects, rangenav::BoostGeometryClipper)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(map_insert, rangenav::BoostGeometryClipper)->Unit(benchmark::kMillisecond);
 #ifdef RANGENAV_HAVE_CLIPPER
-BENCHMARK_TEMPLATE(union_of, rangenav::VattiClipper)->Unit(benchmark::kMicrosecond);
-BENCHMARK_TEMPLATE(intersects, rangenav::VattiClipper)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(union_of, rangenav::VattiClipper)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(intersects, rangenav::VattiClipper)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(map_insert, rangenav::VattiClipper)->Unit(benchmark::kMillisecond);
 #endif
 

@@ -180,6 +180,59 @@ TEST_CASE("organized_euclidean_clusters equals kd-tree clustering on an organise
       "and > 0");
 }
 
+TEST_CASE("organized_euclidean_clusters equals brute-force 8-neighbour components", "[geometry]") {
+  // Reference: every 8-neighbour pair of finite points closer than the tolerance united, clusters
+  // in increasing index order, ordered by size (ties: smallest first index). The row-run
+  // implementation skips diagonal tests that a two-link path already covers; jittered samples
+  // at a tolerance near the pixel pitch make many links (diagonals alone, too) come and go.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (int trial = 0; trial < 40; ++trial) {
+    const std::size_t width = 5 + rng() % 40, height = 2 + rng() % 30;
+    const double jitter = 0.001 * double(trial % 5), tol = 0.009 + 0.0007 * double(trial % 9);
+    std::vector<Point3d> pts;
+    for (std::size_t r = 0; r < height; ++r)
+      for (std::size_t c = 0; c < width; ++c) {
+        Point3d p(0.01 * double(c) + jitter * (u(rng) - 0.5),
+                  0.01 * double(r) + jitter * (u(rng) - 0.5), (u(rng) < 0.05 ? 0.5 : 0.0));
+        const double x = u(rng);
+        if (x < 0.08) p = Point3d::Constant(nan);
+        if (x > 0.98) p.y() = inf;
+        pts.push_back(p);
+      }
+    std::vector<std::size_t> parent(pts.size());
+    std::iota(parent.begin(), parent.end(), std::size_t{0});
+    const auto ok = [&](std::size_t i) { return pts[i].allFinite(); };
+    for (std::size_t r = 0; r < height; ++r)
+      for (std::size_t c = 0; c < width; ++c)
+        for (int dr = -1; dr <= 1; ++dr)
+          for (int dc = -1; dc <= 1; ++dc) {
+            const auto rr = static_cast<std::ptrdiff_t>(r) + dr;
+            const auto cc = static_cast<std::ptrdiff_t>(c) + dc;
+            if (rr < 0 || cc < 0 || rr >= std::ptrdiff_t(height) || cc >= std::ptrdiff_t(width))
+              continue;
+            const std::size_t i = r * width + c, j = std::size_t(rr) * width + std::size_t(cc);
+            if (ok(i) && ok(j) && (pts[i] - pts[j]).squaredNorm() < tol * tol) {
+              const std::size_t a = find_root(parent, i), b = find_root(parent, j);
+              parent[std::max(a, b)] = std::min(a, b);
+            }
+          }
+    for (const std::size_t min_size : {std::size_t{1}, std::size_t{3}}) {
+      std::vector<std::vector<std::uint32_t>> by_root(pts.size()), reference;
+      for (std::size_t i = 0; i < pts.size(); ++i)
+        if (ok(i)) by_root[find_root(parent, i)].push_back(static_cast<std::uint32_t>(i));
+      for (auto& cl : by_root)
+        if (cl.size() >= min_size && cl.size() <= 200) reference.push_back(cl);
+      std::stable_sort(reference.begin(), reference.end(),
+                       [](const auto& a, const auto& b) { return a.size() > b.size(); });
+      CHECK(organized_euclidean_clusters(std::span<const Point3d>(pts), width, height,
+                                         {tol, min_size, 200}) == reference);
+    }
+  }
+}
+
 // ---- concave hull -------------------------------------------------------------------------
 
 namespace {
@@ -294,6 +347,98 @@ TEST_CASE("concave_hull separates pieces and handles degenerate input", "[geomet
                     "rangenav: ConcaveHull::compute: argument 'cloud[1]' = nan 1 must be finite");
   CHECK_THROWS_WITH(ConcaveHull({-1.0, 0.001, 0.0}),
                     "rangenav: ConcaveHull: argument 'params.alpha' = -1 must be finite and > 0");
+}
+
+TEST_CASE("concave_hull thinning is invariant under shifts by whole cells", "[geometry]") {
+  // The thinning cells are the floor division of grid coordinates by the cell edge (computed
+  // through a multiplication by its inverse plus a correction): shifting the input by whole
+  // cells, to negative coordinates, across zero or onto exact multiples, must give the same
+  // polygons, shifted, and the same pieces. Points on grid steps so that snapping is exact.
+  const double res = 0.001, alpha = 0.04;
+  const double steps = std::floor(0.5 * alpha / res);  // the cell edge in grid steps
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> jitter(-2, 2);
+  std::vector<Point2d> base;
+  for (int i = 0; i <= 150; ++i)
+    for (int j = 0; j <= 100; ++j) {
+      const Point2d p(0.004 * i, 0.004 * j);
+      const bool hole = (p - Point2d(0.2, 0.2)).norm() < 0.08;
+      const bool notch = p.x() > 0.45 && p.y() < 0.15;
+      if (!hole && !notch)
+        base.emplace_back(res * (4 * i + jitter(rng)), res * (4 * j + jitter(rng)));
+    }
+  ConcaveHullParams params{alpha, res, 0.0, 0.5};
+  std::vector<std::int32_t> piece0, piece1;
+  const auto hull0 = ConcaveHull(params).compute(base, &piece0);
+  REQUIRE(hull0.size() == 1);
+  CHECK(hull0[0].holes.size() == 1);
+  for (const double cells : {-7.0, 3.0, -40.0, 1.0}) {
+    const Point2d shift(cells * steps * res, -2 * cells * steps * res);
+    std::vector<Point2d> moved = base;
+    for (Point2d& p : moved)
+      p += shift;
+    const auto hull1 = ConcaveHull(params).compute(moved, &piece1);
+    REQUIRE(hull1.size() == hull0.size());
+    CHECK(piece1 == piece0);
+    REQUIRE(hull1[0].outer.size() == hull0[0].outer.size());
+    REQUIRE(hull1[0].holes.size() == hull0[0].holes.size());
+    double worst = 0;
+    for (std::size_t v = 0; v < hull0[0].outer.size(); ++v)
+      worst = std::max(worst, (hull1[0].outer[v] - shift - hull0[0].outer[v]).norm());
+    for (std::size_t v = 0; v < hull0[0].holes[0].size(); ++v)
+      worst = std::max(worst, (hull1[0].holes[0][v] - shift - hull0[0].holes[0][v]).norm());
+    CHECK(worst < 1e-9);
+  }
+}
+
+TEST_CASE("concave_hull sparse interior gives the same alpha shape", "[geometry]") {
+  // Deep interior cells keep a site only at even cell coordinates; the file comment proves that
+  // the alpha shape does not change. Random unions of discs and rectangles with holes, sampled
+  // on jittered grids of random pitch, random alpha, thinning 0.5 and 0.3: the same polygons,
+  // vertex for vertex, and the same piece for every point.
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int trial = 0; trial < 12; ++trial) {
+    struct Disc {
+      Point2d c;
+      double r;
+      bool hole;
+    };
+    std::vector<Disc> discs;
+    for (int k = 0; k < 6; ++k)
+      discs.push_back({Point2d(1.5 * u(rng), 1.0 * u(rng)), 0.15 + 0.35 * u(rng), k >= 4});
+    const double bx = 0.3 + 0.6 * u(rng);  // a rectangle from (bx, 0.2) to (bx + 0.7, 0.6)
+    const auto inside = [&](const Point2d& p) {
+      bool in = p.x() > bx && p.x() < bx + 0.7 && p.y() > 0.2 && p.y() < 0.6;
+      for (const Disc& d : discs)
+        if (!d.hole && (p - d.c).norm() < d.r) in = true;
+      for (const Disc& d : discs)
+        if (d.hole && (p - d.c).norm() < 0.3 * d.r) in = false;
+      return in;
+    };
+    const double step = 0.004 + 0.004 * u(rng), alpha = 0.03 + 0.04 * u(rng);
+    std::uniform_real_distribution<double> jitter(-0.4 * step, 0.4 * step);
+    std::vector<Point2d> pts;
+    for (double x = -0.5; x < 2.2; x += step)
+      for (double y = -0.5; y < 1.6; y += step) {
+        const Point2d p(x + jitter(rng), y + jitter(rng));
+        if (inside(p)) pts.push_back(p);
+      }
+    for (const double thinning : {0.5, 0.3}) {
+      ConcaveHullParams params{alpha, 0.001, 0.0, thinning};
+      std::vector<std::int32_t> piece_sparse, piece_dense;
+      const auto sparse = ConcaveHull(params).compute(pts, &piece_sparse);
+      params.sparse_interior = false;
+      const auto dense = ConcaveHull(params).compute(pts, &piece_dense);
+      REQUIRE(!dense.empty());
+      REQUIRE(sparse.size() == dense.size());
+      for (std::size_t k = 0; k < dense.size(); ++k) {
+        CHECK(sparse[k].outer == dense[k].outer);
+        CHECK(sparse[k].holes == dense[k].holes);
+      }
+      CHECK(piece_sparse == piece_dense);
+    }
+  }
 }
 
 TEST_CASE("concave_hull interior thinning keeps the shape, its holes, pieces and areas",

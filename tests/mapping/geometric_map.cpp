@@ -168,7 +168,10 @@ TEMPLATE_TEST_CASE("GeometricMap keeps planes that are not similar or do not ove
     CHECK(map.insert(horizontal(2, 0, 2.5, 2, 0)).merged == 0);
     CHECK(map.size() == 3);
   }
-  SECTION("just inside both thresholds: merged") {
+  SECTION("just inside both thresholds of the paper's Eq. (6b) at the origin: merged") {
+    GeometricMapParameters<double> paper;
+    paper.offset_test = PlaneOffsetTest::origin;
+    map = TestType(paper);
     map.insert(base);
     const Eigen::Matrix3d r =
         Eigen::AngleAxisd(15 * std::numbers::pi / 180, Point3d::UnitY()).toRotationMatrix();
@@ -180,6 +183,87 @@ TEMPLATE_TEST_CASE("GeometricMap keeps planes that are not similar or do not ove
       corners.push_back(tilted.project(c));
     CHECK(map.insert(planar(tilted, corners)).merged == 1);
     CHECK(map.size() == 1);
+  }
+}
+
+TEMPLATE_TEST_CASE("GeometricMap: Eq. (6b) at the origin or at the shapes' centroids",
+                   "[mapping][geometric_map]", RANGENAV_MAPS) {
+  // One true plane z = 0 seen as two overlapping pieces 5 m from the origin, the second fitted
+  // 3 deg off about the y axis through (5, 0, 0), as plane extraction delivers a small or noisy
+  // surface: the offsets at the origin differ by 5 sin 3 deg = 0.26 m > t2, at the pieces by
+  // less than 0.5 sin 3 deg = 0.026 m.
+  const double tilt = 3 * std::numbers::pi / 180;
+  const auto pieces = [&](const Point3d& shift) {
+    const Point3d pivot = Point3d(5, 0, 0) + shift;
+    const auto truth = Plane3<>::through(pivot, Point3d::UnitZ());
+    const auto tilted =
+        Plane3<>::through(pivot, Eigen::AngleAxisd(tilt, Point3d::UnitY()) * Point3d::UnitZ());
+    std::vector<Point3d> a, b;
+    for (const auto& c :
+         {Point3d(4, -0.5, 0), Point3d(5, -0.5, 0), Point3d(5, 0.5, 0), Point3d(4, 0.5, 0)}) {
+      a.push_back(c + shift);
+      b.push_back(tilted.project(c + Point3d(0.5, 0, 0) + shift));
+    }
+    return std::pair{planar(truth, a), planar(tilted, b)};
+  };
+  GeometricMapParameters<double> paper, at_centroid;
+  paper.offset_test = PlaneOffsetTest::origin;
+  at_centroid.offset_test = PlaneOffsetTest::centroid;
+  CHECK(GeometricMapParameters<double>{}.offset_test == PlaneOffsetTest::centroid);
+
+  SECTION("two pieces of one plane, 5 m out, 3 deg apart: only the centroid test merges them") {
+    const auto [a, b] = pieces(Point3d::Zero());
+    CHECK(std::abs(a.plane.d - b.plane.d) == Approx(5 * std::sin(tilt)).epsilon(1e-6));
+    TestType origin_map(paper), centroid_map(at_centroid);
+    origin_map.insert(a);
+    CHECK(origin_map.insert(b).merged == 0);
+    CHECK(origin_map.size() == 2);
+    centroid_map.insert(a);
+    CHECK(centroid_map.insert(b).merged == 1);
+    REQUIRE(centroid_map.size() == 1);
+    // Eq. (7) with weights 1 and 1: the normal halfway, 1.5 deg off the truth, and the plane
+    // still through the pivot both pieces share; the union spans x in [4, 5.5] (1.5 m^2 up to the
+    // cos 3 deg of the tilted piece's projection).
+    const auto& merged = centroid_map.shapes().front().surface;
+    CHECK(std::acos(merged.plane.normal.dot(Point3d::UnitZ())) == Approx(tilt / 2));
+    CHECK(merged.plane.signed_distance({5, 0, 0}) == Approx(0).margin(1e-9));
+    CHECK(merged.area() == Approx(1.5).epsilon(0.01));
+    // The centroid of the union, in the world.
+    CHECK((centroid_map.shapes().front().centroid - Point3d(4.75, 0, 0)).norm() < 0.01);
+  }
+  SECTION("the same pieces next to the origin: both tests merge them") {
+    const auto [a, b] = pieces(Point3d(-5, 0, 0));
+    for (const auto& params : {paper, at_centroid}) {
+      TestType map(params);
+      map.insert(a);
+      CHECK(map.insert(b).merged == 1);
+      CHECK(map.size() == 1);
+    }
+  }
+  SECTION("the centroid test is translation-invariant") {
+    for (const Point3d& shift : {Point3d(-5, 0, 0), Point3d(20, -30, 0), Point3d(0, 0, 7)}) {
+      const auto [a, b] = pieces(shift);
+      TestType map(at_centroid);
+      map.insert(a);
+      CHECK(map.insert(b).merged == 1);
+    }
+  }
+  SECTION("two parallel overlapping planes 15 cm apart stay apart under both tests") {
+    for (const Point3d& shift : {Point3d(0, 0, 0), Point3d(-5, 0, 0)}) {
+      const auto [a, b] = pieces(shift);
+      auto above = a;
+      above.plane.d -= 0.15;  // z = 0.15 (+ shift.z), same frame orientation
+      above.frame = PlaneFrame<>::of(above.plane);
+      above.polygon.outer.clear();
+      for (const auto& c : a.outer_world())
+        above.polygon.outer.push_back(above.frame.to_plane(c + Point3d(0.3, 0, 0.15)));
+      for (const auto& params : {paper, at_centroid}) {
+        TestType map(params);
+        map.insert(a);
+        CHECK(map.insert(above).merged == 0);
+        CHECK(map.size() == 2);
+      }
+    }
   }
 }
 
@@ -287,8 +371,12 @@ TEMPLATE_TEST_CASE("GeometricMap editing: select by id, ray and point; erase; mo
     Transform3d lift = Transform3d::Identity();
     lift.translation() = Point3d(1, 0, 0.1);
     lift.rotate(Eigen::AngleAxisd(std::numbers::pi / 2, Point3d::UnitZ()));
+    const Point3d centroid = map.shape(table).centroid;  // the table top's, with its hole
+    CHECK(centroid.z() == Approx(0.75));
+    CHECK((centroid.x() > 2.0 && centroid.x() < 3.2 && centroid.y() > 1.6 && centroid.y() < 2.4));
     map.move(table, lift);
     const auto& s = map.shape(table);
+    CHECK(s.centroid.isApprox(lift * centroid, 1e-12));
     CHECK(s.surface.plane.normal.isApprox(Point3d::UnitZ()));
     CHECK(s.surface.plane.d == Approx(-0.85));
     CHECK(s.surface.area() == Approx(1.2 * 0.8 - 0.04));

@@ -30,6 +30,21 @@
 // as without thinning up to a fraction of a cell (tested: areas within 0.3 %), with far fewer
 // sites (a 1 m^2 plane sampled every 5 mm: 40,000 points, about 1,600 + 300 sites at alpha
 // 5 cm). Every input point keeps its piece: a thinned point belongs to a site of its cell.
+//
+// Sparse interior (ConcaveHullParams::sparse_interior, with thinning; for speed, the Voronoi
+// diagram costs about 7,500 instructions per site): a deep cell, one whose 7 x 7 block of cells
+// is all occupied, keeps its centre site only when both its cell coordinates are even; the
+// alpha shape is exactly the same. Proof: the even cells around a removed cell are interior and
+// keep their centres, so every point of the occupied cells is still within c sqrt 2 of a site
+// (the worst place is the centre of a cell with both coordinates odd); a Delaunay face whose
+// circumcentre lies there has circumradius <= c sqrt 2 < alpha and is kept. A face that is not
+// kept (radius R > alpha >= 2 c, empty open disc) has its centre outside the occupied cells; if
+// its disc held a removed centre s, it would hold a disc of radius 1.5 c (< R) centred within
+// 1.5 c of s (slide a disc of radius 1.5 c from s towards the centre), which lies inside the 7 x 7
+// block around s and contains a remaining site (within c sqrt 2 < 1.5 c of its centre): not empty.
+// So the faces that are not kept are the same with and without the removed sites, the removed
+// sites are not on the convex hull, and the kept faces fill the same region: same boundary edges,
+// same rings, same pieces (tested against sparse_interior = false).
 
 #include <boost/geometry/algorithms/within.hpp>
 #include <boost/geometry/geometries/point_xy.hpp>
@@ -67,6 +82,10 @@ struct ConcaveHullParams {
   /// Thinning cell edge as a fraction of alpha, in [0, 0.5]; 0 = every point is a site (see the
   /// file comment). Cells smaller than 2 grid steps are not thinned.
   double thinning = 0.0;
+  /// With thinning: deep interior cells (their 7 x 7 block of cells all occupied) keep a site
+  /// only where both cell coordinates are even, a quarter of the sites there; the alpha shape is
+  /// the same (see the file comment). false: every interior cell keeps its site.
+  bool sparse_interior = true;
 
   void validate(std::string_view where) const {
     detail::require_positive(where, "params.alpha", alpha);
@@ -103,14 +122,24 @@ class ConcaveHull {
     const std::size_t n = traits::size(cloud);
     const double inv = 1.0 / grid.resolution;
     snapped_.resize(n);
+    cell_type lo{std::numeric_limits<std::int32_t>::max(),
+                 std::numeric_limits<std::int32_t>::max()};
+    cell_type hi{std::numeric_limits<std::int32_t>::min(),
+                 std::numeric_limits<std::int32_t>::min()};
     for (std::size_t i = 0; i < n; ++i) {
       const Point2d p = traits::point(cloud, i).template cast<double>();
       const double gx = p.x() * inv, gy = p.y() * inv;
-      if (std::abs(gx) <= IntegerGrid::limit && std::abs(gy) <= IntegerGrid::limit)
-        snapped_[i] = {round_half_away(gx), round_half_away(gy)};
+      cell_type g;
+      if (std::abs(gx) <= IntegerGrid::limit && std::abs(gy) <= IntegerGrid::limit) [[likely]]
+        g = {round_half_away(gx), round_half_away(gy)};
       else  // NaN or out of range: the grid names the point in its message
-        snapped_[i] = grid.snap(p, where, "cloud[" + std::to_string(i) + "]");
+        g = grid.snap(p, where, "cloud[" + std::to_string(i) + "]");
+      snapped_[i] = g;
+      lo = {std::min(lo[0], g[0]), std::min(lo[1], g[1])};
+      hi = {std::max(hi[0], g[0]), std::max(hi[1], g[1])};
     }
+    lo_ = lo;
+    hi_ = hi;
     select_sites();
     auto result = build(grid);
     if (piece_of_point) {  // per site, then per point through its site (a thinned point: its
@@ -150,19 +179,16 @@ class ConcaveHull {
     const double cell_steps = std::floor(params_.thinning * params_.alpha / params_.resolution);
     if (!(cell_steps >= 2) || n < 64) return keep_all();
     const auto k = static_cast<std::int64_t>(std::min(cell_steps, IntegerGrid::limit));
-    const auto k32 = static_cast<std::int32_t>(k);
-    const auto cell_of = [k32](std::int32_t v) -> std::int64_t {  // floor division
-      const std::int32_t q = v / k32;
-      return (q * k32 != v && v < 0) ? q - 1 : q;
+    // Floor division by k through a multiplication by 1 / k (an integer division per point
+    // costs more than the rest of the pass), corrected by one step where rounding misses.
+    const double inv_k = 1.0 / double(k);
+    const auto cell_of = [k, inv_k](std::int32_t v) -> std::int64_t {
+      auto q = static_cast<std::int64_t>(std::floor(double(v) * inv_k));
+      q += (q + 1) * k <= v ? 1 : 0;
+      q -= q * k > v ? 1 : 0;
+      return q;
     };
-    std::int32_t gx0 = std::numeric_limits<std::int32_t>::max(), gy0 = gx0;
-    std::int32_t gx1 = std::numeric_limits<std::int32_t>::min(), gy1 = gx1;
-    for (const cell_type& g : snapped_) {
-      gx0 = std::min(gx0, g[0]);
-      gx1 = std::max(gx1, g[0]);
-      gy0 = std::min(gy0, g[1]);
-      gy1 = std::max(gy1, g[1]);
-    }
+    const std::int32_t gx0 = lo_[0], gy0 = lo_[1], gx1 = hi_[0], gy1 = hi_[1];
     const std::int64_t x0 = cell_of(gx0), x1 = cell_of(gx1);  // floor division is monotonic
     const std::int64_t y0 = cell_of(gy0), y1 = cell_of(gy1);
     // A dense cell array with a margin of one empty cell on each side; skipped (no thinning)
@@ -208,6 +234,7 @@ class ConcaveHull {
     }
     // cell_slot_ values >= boundary_tag are boundary blocks; below are first points.
     const std::uint32_t boundary_tag = none - 1 - static_cast<std::uint32_t>(mask_.size());
+    if (params_.sparse_interior) sparsen_interior(uw, static_cast<std::size_t>(h), x0, y0);
     keyed_.clear();
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t c = cell_index_[i];
@@ -264,6 +291,41 @@ class ConcaveHull {
       for (std::size_t d = 1; d < dir.size() && !is_site; ++d)
         is_site = extreme_[block * dir.size() + d] == i;
       if (!is_site) representative_[i] = first;
+    }
+  }
+
+  /// Sparse interior (see the file comment): a deep cell, one whose 7 x 7 block of cells is all
+  /// occupied, gets no site unless both its (absolute) cell coordinates are even; its points are
+  /// handed to the site of the even cell next to it (cell_slot_ takes that cell's first point).
+  void sparsen_interior(std::size_t w, std::size_t h, std::int64_t x0, std::int64_t y0) {
+    constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+    constexpr std::uint8_t full = 7;  // the block's edge in cells
+    if (w < full || h < full) return;
+    run_.resize(w * h);  // occupied cells in a row ending here, up to 7
+    for (std::size_t y = 0; y < h; ++y) {
+      std::uint8_t count = 0;
+      for (std::size_t x = 0; x < w; ++x) {
+        const std::size_t c = y * w + x;
+        count =
+            cell_slot_[c] == none ? 0 : static_cast<std::uint8_t>(std::min<int>(count + 1, full));
+        run_[c] = count;
+      }
+    }
+    for (std::size_t x = 3; x + 3 < w; ++x) {
+      std::uint8_t count = 0;  // rows in a column whose 7 cells around x are occupied
+      for (std::size_t y = 0; y < h; ++y) {
+        count = run_[y * w + x + 3] == full
+                    ? static_cast<std::uint8_t>(std::min<int>(count + 1, full))
+                    : 0;
+        if (count < full) continue;
+        const std::size_t c = (y - 3) * w + x;  // the deep cell, centre of the block
+        const std::int64_t ax = static_cast<std::int64_t>(x) - 1 + x0;
+        const std::int64_t ay = static_cast<std::int64_t>(y - 3) - 1 + y0;
+        if (((ax | ay) & 1) == 0) continue;
+        const std::size_t even =
+            c - static_cast<std::size_t>(ax & 1) - static_cast<std::size_t>(ay & 1) * w;
+        cell_slot_[c] = cell_slot_[even];
+      }
     }
   }
 
@@ -399,11 +461,12 @@ class ConcaveHull {
     return result;
   }
 
-  /// std::round for |v| <= IntegerGrid::limit, without the library call.
+  /// std::round for |v| <= IntegerGrid::limit, without the library call or a branch (the
+  /// fraction's comparisons are random, so a branch is mispredicted half of the time).
   static std::int32_t round_half_away(double v) {
     const auto t = static_cast<std::int32_t>(v);  // towards zero
     const double frac = v - double(t);
-    return frac >= 0.5 ? t + 1 : frac <= -0.5 ? t - 1 : t;
+    return t + static_cast<std::int32_t>(frac >= 0.5) - static_cast<std::int32_t>(frac <= -0.5);
   }
 
   /// Union-find root with path halving.
@@ -471,9 +534,11 @@ class ConcaveHull {
 
   ConcaveHullParams params_;
   std::vector<cell_type> snapped_;             // per input point: its grid point
+  cell_type lo_{}, hi_{};                      // bounding box of snapped_
   std::vector<std::uint32_t> representative_;  // per input point: see select_sites
   std::vector<std::uint32_t> cell_slot_;       // thinning cells: see select_sites
   std::vector<std::uint8_t> mask_;             // per boundary cell: its empty neighbours
+  std::vector<std::uint8_t> run_;              // sparsen_interior's row runs
   std::vector<std::uint32_t> extreme_;         // per boundary cell: 8 extreme points
   std::vector<std::uint32_t> cell_index_;      // per input point: its thinning cell
   std::vector<std::pair<cell_type, std::uint32_t>> keyed_;  // site grid point, input index

@@ -131,20 +131,48 @@ template <class Scalar>
     detail::throw_invalid_argument(where, "points.size()", points.size(), "must fit 32 bits");
   const std::size_t n = points.size();
   constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
-  // Union-find over the pixels; parent[i] == none marks a non-finite point. Unions always hang
-  // the larger root under the smaller, so every root is its component's smallest index.
-  std::vector<std::uint32_t> parent(n);
-  for (std::size_t i = 0; i < n; ++i)
-    parent[i] =
-        std::isfinite(points[i].x()) && std::isfinite(points[i].y()) && std::isfinite(points[i].z())
-            ? static_cast<std::uint32_t>(i)
-            : none;
+  const Scalar tol_sq = static_cast<Scalar>(params.tolerance * params.tolerance);
+  // A non-finite coordinate makes the squared distance NaN or infinite, never below tol_sq, so
+  // `close` needs no finiteness test; only a pixel without any link is tested (finite: a
+  // singleton, else no point).
+  const auto close = [&](std::size_t i, std::size_t j) {
+    return (points[i] - points[j]).squaredNorm() < tol_sq;
+  };
+  const auto finite = [&](std::size_t i) {
+    return std::isfinite(points[i].x()) && std::isfinite(points[i].y()) &&
+           std::isfinite(points[i].z());
+  };
+  // Row runs: maximal chains of horizontally linked pixels. run[i] is the first pixel of i's run
+  // (none: a pixel that is no point). Union-find over the runs (their first pixels), the larger
+  // root always hung under the smaller, so every root is its component's smallest index.
+  // right[i]: pixel i is linked to i + 1.
+  std::vector<std::uint32_t> run(n), parent(n);
+  std::vector<std::uint8_t> right(n, 0);
+  for (std::size_t r = 0; r < height; ++r) {
+    const std::size_t row = r * width;
+    std::size_t start = row;
+    for (std::size_t c = 0; c < width; ++c) {
+      const std::size_t i = row + c;
+      const bool linked = c + 1 < width && close(i, i + 1);
+      right[i] = linked ? 1 : 0;
+      run[i] = static_cast<std::uint32_t>(start);
+      if (linked) continue;
+      if (start == i && !finite(i)) run[i] = none;  // a lone pixel with no point
+      parent[start] = static_cast<std::uint32_t>(start);
+      start = i + 1;
+    }
+  }
   const auto find = [&](std::uint32_t i) {
     while (parent[i] != i)
       i = parent[i] = parent[parent[i]];
     return i;
   };
+  // The last pair of runs united: consecutive pixels of two overlapping runs repeat it.
+  std::uint32_t last_a = none, last_b = none;
   const auto unite = [&](std::uint32_t a, std::uint32_t b) {
+    if (a == last_a && b == last_b) return;
+    last_a = a;
+    last_b = b;
     a = find(a);
     b = find(b);
     if (a < b)
@@ -152,40 +180,66 @@ template <class Scalar>
     else if (b < a)
       parent[a] = b;
   };
-  const Scalar tol_sq = static_cast<Scalar>(params.tolerance * params.tolerance);
-  const auto close = [&](std::size_t i, std::size_t j) {
-    return parent[j] != none && (points[i] - points[j]).squaredNorm() < tol_sq;
-  };
-  // Each pixel is joined with its right, lower-left, lower and lower-right neighbours; with the
-  // symmetric pairs seen from the other side that is the whole 8-neighbourhood.
-  for (std::size_t r = 0; r < height; ++r)
+  // Links to the next row: first the vertical ones (vert[c]: pixel c of this row is linked to
+  // the one below), then the diagonals, each tested only when no path of two tested links
+  // already joins its ends (for i -> below+1: i - below - below+1 or i - i+1 - below+1), which
+  // on a densely sampled surface leaves about one vertical test per pixel; the components are
+  // the same as with every 8-neighbour link tested.
+  std::vector<std::uint8_t> vert(width);
+  for (std::size_t r = 0; r + 1 < height; ++r) {
+    const std::size_t row = r * width;
     for (std::size_t c = 0; c < width; ++c) {
-      const std::size_t i = r * width + c;
-      if (parent[i] == none) continue;
-      const auto ui = static_cast<std::uint32_t>(i);
-      if (c + 1 < width && close(i, i + 1)) unite(ui, static_cast<std::uint32_t>(i + 1));
-      if (r + 1 == height) continue;
-      const std::size_t below = i + width;
-      if (c > 0 && close(i, below - 1)) unite(ui, static_cast<std::uint32_t>(below - 1));
-      if (close(i, below)) unite(ui, static_cast<std::uint32_t>(below));
-      if (c + 1 < width && close(i, below + 1)) unite(ui, static_cast<std::uint32_t>(below + 1));
+      const std::size_t i = row + c, below = i + width;
+      vert[c] = run[i] != none && run[below] != none && close(i, below) ? 1 : 0;
+      if (vert[c]) unite(run[i], run[below]);
     }
-  // Component sizes at the roots, then one bucket per admitted component.
+    for (std::size_t c = 0; c < width; ++c) {
+      const std::size_t i = row + c, below = i + width;
+      if (run[i] == none) continue;
+      if (c + 1 < width && !(vert[c] && right[below]) && !(right[i] && vert[c + 1]) &&
+          run[below + 1] != none && close(i, below + 1))
+        unite(run[i], run[below + 1]);
+      if (c > 0 && !(vert[c] && right[below - 1]) && !(right[i - 1] && vert[c - 1]) &&
+          run[below - 1] != none && close(i, below - 1))
+        unite(run[i], run[below - 1]);
+    }
+  }
+  // Component sizes at the roots (one find per run; parent[] of a run's first pixel is then its
+  // root), then one bucket per admitted component (count[root] becomes its bucket), then the
+  // runs' pixels appended run by run, which keeps every bucket in increasing index order.
   std::vector<std::uint32_t> count(n, 0);
-  for (std::size_t i = 0; i < n; ++i)
-    if (parent[i] != none) ++count[find(static_cast<std::uint32_t>(i))];
-  std::vector<std::uint32_t> slot(n, none);
-  std::vector<std::vector<std::uint32_t>> clusters;
-  for (std::size_t i = 0; i < n; ++i)
-    if (count[i] != 0 && count[i] >= params.min_cluster_size &&
-        count[i] <= params.max_cluster_size) {
-      slot[i] = static_cast<std::uint32_t>(clusters.size());
-      clusters.emplace_back().reserve(count[i]);
+  for (std::size_t r = 0; r < height; ++r)
+    for (std::size_t i = r * width, end = i + width; i < end;) {
+      std::size_t j = i + 1;
+      while (j < end && run[j] == i)
+        ++j;
+      if (run[i] == i) {
+        parent[i] = find(static_cast<std::uint32_t>(i));
+        count[parent[i]] += static_cast<std::uint32_t>(j - i);
+      }
+      i = j;
     }
-  for (std::size_t i = 0; i < n; ++i)
-    if (parent[i] != none) {
-      const std::uint32_t s = slot[find(static_cast<std::uint32_t>(i))];
-      if (s != none) clusters[s].push_back(static_cast<std::uint32_t>(i));
+  std::vector<std::vector<std::uint32_t>> clusters;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t size = count[i];
+    count[i] = none;
+    if (size != 0 && size >= params.min_cluster_size && size <= params.max_cluster_size) {
+      count[i] = static_cast<std::uint32_t>(clusters.size());
+      clusters.emplace_back().reserve(size);
+    }
+  }
+  for (std::size_t r = 0; r < height; ++r)
+    for (std::size_t i = r * width, end = i + width; i < end;) {
+      std::size_t j = i + 1;
+      while (j < end && run[j] == i)
+        ++j;
+      if (run[i] == i)
+        if (const std::uint32_t s = count[parent[i]]; s != none) {
+          auto& cluster = clusters[s];
+          for (std::size_t k = i; k < j; ++k)
+            cluster.push_back(static_cast<std::uint32_t>(k));
+        }
+      i = j;
     }
   std::stable_sort(clusters.begin(), clusters.end(),
                    [](const auto& a, const auto& b) { return a.size() > b.size(); });

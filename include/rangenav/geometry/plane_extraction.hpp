@@ -124,21 +124,25 @@ class PlaneExtractor {
   template <class Engine>
   std::size_t extract(std::span<const Point3d> points, std::span<const std::uint32_t> cluster,
                       Engine& rng, std::vector<ExtractedPlane>& out) {
-    remaining_.clear();
+    // The cluster's finite points are copied into remaining_ (contiguous, in cluster order):
+    // every pass below reads and partitions them there instead of gathering through indices.
+    remaining_.resize(cluster.size());
+    std::size_t kept = 0;
     for (const std::uint32_t i : cluster) {
       if (i >= points.size())
         detail::throw_invalid_argument(
             "PlaneExtractor::extract", "cluster index", i,
             "must be < points.size() = " + std::to_string(points.size()));
       const Point3d& p = points[i];
-      if (std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()))
-        remaining_.push_back(i);
+      remaining_[kept] = p;
+      kept += std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()) ? 1 : 0;
     }
+    remaining_.resize(kept);
     const std::size_t min_remaining = std::max<std::size_t>(
         3, params_.min_remaining != 0 ? params_.min_remaining : params_.min_inliers);
     const std::size_t before = out.size();
     while (remaining_.size() >= min_remaining) {
-      const std::optional<Plane3<double>> hypothesis = ransac(points, rng);
+      const std::optional<Plane3<double>> hypothesis = ransac(rng);
       if (!hypothesis) break;
       // Two rounds. 1: the inliers of the RANSAC plane -> their largest connected piece -> least-
       // squares refit on it (a strip of another surface crossing the band cannot tilt the
@@ -148,34 +152,38 @@ class PlaneExtractor {
       // 8-connected groups of occupied cells of alpha / 2 (points of neighbouring cells are at
       // most 1.4 alpha apart, where the alpha shape joins points up to 2 alpha apart), which
       // is much cheaper than a triangulation and only decides what the refit sees.
+      // The RANSAC plane's inliers (the verification count on the whole cluster: too few, no
+      // plane) moved to the front.
       Plane3<double> plane = *hypothesis;
-      std::size_t surface = largest_cell_piece(points, split_inliers(points, plane), plane);
+      const double cells = 2.0 / params_.hull.alpha;  // round 1's cells of alpha / 2
+      std::size_t surface = split_inliers(plane, PlaneFrame<double>::of(plane), cells);
       if (surface < params_.min_inliers) break;
-      if (const auto refit = fit_least_squares(points, surface, plane);
-          refit && admissible(refit->normal))
+      Moments moments;
+      surface = largest_cell_piece(surface, moments);
+      if (surface < params_.min_inliers) break;
+      if (const auto refit = fit_least_squares(moments, plane); refit && admissible(refit->normal))
         plane = *refit;
-      const std::size_t count = split_inliers(points, plane);
       const PlaneFrame<double> hull_frame = PlaneFrame<double>::of(plane);
-      projected_.resize(count);
-      for (std::size_t k = 0; k < count; ++k)
-        projected_[k] = hull_frame.to_plane(points[remaining_[k]]);  // Eq. (1)-(3)
+      const std::size_t count = split_inliers(plane, hull_frame, 1.0);
       std::vector<Polygon2<double>> pieces = hull_.compute(projected_, &piece_);
       surface = 0;  // stable partition: the largest piece's points first
       others_.clear();
+      moments = {};
       for (std::size_t k = 0; k < count; ++k)
-        if (piece_[k] == 0)
+        if (piece_[k] == 0) {
+          moments.add(remaining_[k]);
           remaining_[surface++] = remaining_[k];
-        else
+        } else {
           others_.push_back(remaining_[k]);
+        }
       std::copy(others_.begin(), others_.end(),
                 remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
       if (pieces.empty() || surface < params_.min_inliers) break;
-      if (const auto refit = fit_least_squares(points, surface, plane);
-          refit && admissible(refit->normal))
+      if (const auto refit = fit_least_squares(moments, plane); refit && admissible(refit->normal))
         plane = *refit;
       if (params_.viewpoint && plane.signed_distance(*params_.viewpoint) < 0)
         plane = plane.flipped();
-      emit(points, surface, plane, hull_frame, std::move(pieces.front()), out);
+      emit(surface, plane, hull_frame, std::move(pieces.front()), out);
       remaining_.erase(remaining_.begin(),
                        remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
     }
@@ -203,7 +211,7 @@ class PlaneExtractor {
   /// copied into subset_ so that the scoring loop reads contiguous memory); the best is counted
   /// on all of remaining_.
   template <class Engine>
-  std::optional<Plane3<double>> ransac(std::span<const Point3d> points, Engine& rng) {
+  std::optional<Plane3<double>> ransac(Engine& rng) {
     const std::size_t n = remaining_.size();
     std::uniform_int_distribution<std::size_t> pick(0, n - 1);
     const double thr = params_.distance_threshold;
@@ -212,15 +220,15 @@ class PlaneExtractor {
                               : params_.evaluation_subset;
     subset_.resize(m);
     for (std::size_t k = 0; k < m; ++k)
-      subset_[k] = points[remaining_[m == n ? k : pick(rng)]];
+      subset_[k] = remaining_[m == n ? k : pick(rng)];
     std::size_t best_count = 0;
     std::optional<Plane3<double>> best;
     double needed = params_.max_iterations;
     for (int it = 0; it < params_.max_iterations && it < needed; ++it) {
       const std::size_t a = pick(rng), b = pick(rng), c = pick(rng);
       if (a == b || b == c || a == c) continue;
-      const Point3d& p = points[remaining_[a]];
-      const Point3d normal = (points[remaining_[b]] - p).cross(points[remaining_[c]] - p);
+      const Point3d& p = remaining_[a];
+      const Point3d normal = (remaining_[b] - p).cross(remaining_[c] - p);
       const double norm = normal.norm();
       if (!(norm > 1e-12)) continue;  // collinear sample
       const Point3d nn = normal / norm;
@@ -238,28 +246,19 @@ class PlaneExtractor {
         needed = miss <= 0 ? 0 : std::log(1 - params_.confidence) / std::log(miss);
       }
     }
-    if (!best) return std::nullopt;
-    if (m != n) {  // verification on the whole cluster
-      best_count = 0;
-      for (const std::uint32_t i : remaining_)
-        best_count += std::abs(best->signed_distance(points[i])) < thr ? 1 : 0;
-    }
-    if (best_count < params_.min_inliers) return std::nullopt;
+    // The verification on the whole cluster is the caller's split_inliers.
     return best;
   }
 
-  /// Least-squares plane through points[remaining_[0 .. count)]: their centroid and smallest
-  /// principal axis, on the side of `side`'s normal.
-  std::optional<Plane3<double>> fit_least_squares(std::span<const Point3d> points,
-                                                  std::size_t count,
-                                                  const Plane3<double>& side) const {
-    if (count < 3) return std::nullopt;
-    // One pass: sums of q = p - p0 and of q q^T (shifted by the first point for precision).
-    const Point3d p0 = points[remaining_[0]];
-    Point3d sum = Point3d::Zero();
+  /// Sums of q = p - p0 and of q q^T over points p, shifted by the first point p0 for
+  /// precision; accumulated while the points are partitioned (no pass of their own).
+  struct Moments {
+    Point3d p0 = Point3d::Zero(), sum = Point3d::Zero();
     double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
-    for (std::size_t k = 0; k < count; ++k) {
-      const Point3d q = points[remaining_[k]] - p0;
+    std::size_t count = 0;
+    void add(const Point3d& p) {
+      if (count++ == 0) p0 = p;
+      const Point3d q = p - p0;
       sum += q;
       xx += q.x() * q.x();
       xy += q.x() * q.y();
@@ -268,12 +267,19 @@ class PlaneExtractor {
       yz += q.y() * q.z();
       zz += q.z() * q.z();
     }
-    const double inv = 1.0 / double(count);
-    const Point3d mean = sum * inv;
-    const Point3d centroid = p0 + mean;
+  };
+
+  /// Least-squares plane of the points summed in `m`: their centroid and smallest principal
+  /// axis, on the side of `side`'s normal.
+  static std::optional<Plane3<double>> fit_least_squares(const Moments& m,
+                                                         const Plane3<double>& side) {
+    if (m.count < 3) return std::nullopt;
+    const double inv = 1.0 / double(m.count);
+    const Point3d mean = m.sum * inv;
+    const Point3d centroid = m.p0 + mean;
     Eigen::Matrix3d cov;  // covariance times count
-    cov << xx, xy, xz, xy, yy, yz, xz, yz, zz;
-    cov.noalias() -= double(count) * mean * mean.transpose();
+    cov << m.xx, m.xy, m.xz, m.xy, m.yy, m.yz, m.xz, m.yz, m.zz;
+    cov.noalias() -= double(m.count) * mean * mean.transpose();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
     Point3d normal = eig.eigenvectors().col(0);
     if (!normal.allFinite() || normal.norm() < 0.5) return std::nullopt;
@@ -282,30 +288,21 @@ class PlaneExtractor {
   }
 
   /// Round 1's piece: moves the points of the largest 8-connected group of occupied cells of
-  /// alpha / 2, among the `count` inliers at the front of remaining_ (projected onto `plane`), to
-  /// the front (stably); returns their count.
-  std::size_t largest_cell_piece(std::span<const Point3d> points, std::size_t count,
-                                 const Plane3<double>& plane) {
+  /// alpha / 2, among the `count` inliers at the front of remaining_ (projected_: their plane
+  /// coordinates in cells, from split_inliers), to the front (stably); returns their count.
+  std::size_t largest_cell_piece(std::size_t count, Moments& moments) {
     if (count == 0) return 0;
-    const PlaneFrame<double> frame = PlaneFrame<double>::of(plane);
-    const double inv = 2.0 / params_.hull.alpha;
-    projected_.resize(count);
-    double x0 = std::numeric_limits<double>::max(), y0 = x0;
-    double x1 = std::numeric_limits<double>::lowest(), y1 = x1;
-    for (std::size_t k = 0; k < count; ++k) {
-      const Point2d q = frame.to_plane(points[remaining_[k]]) * inv;  // in cells, Eq. (1)-(3)
-      projected_[k] = q;
-      x0 = std::min(x0, q.x());
-      x1 = std::max(x1, q.x());
-      y0 = std::min(y0, q.y());
-      y1 = std::max(y1, q.y());
-    }
+    double x0 = lo_.x(), y0 = lo_.y(), x1 = hi_.x(), y1 = hi_.y();
     // Cells with a margin of one on each side; a plane too large for a dense grid of a few
     // cells per point is taken as one piece.
     x0 = std::floor(x0) - 1;
     y0 = std::floor(y0) - 1;
     const double wd = std::floor(x1) - x0 + 2, hd = std::floor(y1) - y0 + 2;
-    if (!(wd * hd <= 4.0 * double(count) + 4096)) return count;
+    if (!(wd * hd <= 4.0 * double(count) + 4096)) {
+      for (std::size_t k = 0; k < count; ++k)
+        moments.add(remaining_[k]);
+      return count;
+    }
     const auto w = static_cast<std::size_t>(wd), h = static_cast<std::size_t>(hd);
     constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
     cells_.assign(w * h, none);  // union-find parent per occupied cell
@@ -345,37 +342,60 @@ class PlaneExtractor {
     std::size_t surface = 0;  // stable partition
     others_.clear();
     for (std::size_t k = 0; k < count; ++k)
-      if (static_cast<std::uint32_t>(piece_[k]) == best)
+      if (static_cast<std::uint32_t>(piece_[k]) == best) {
+        moments.add(remaining_[k]);
         remaining_[surface++] = remaining_[k];
-      else
+      } else
         others_.push_back(remaining_[k]);
     std::copy(others_.begin(), others_.end(),
               remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
     return surface;
   }
 
-  /// Moves the inliers of `plane` to the front of remaining_; returns their count.
-  std::size_t split_inliers(std::span<const Point3d> points, const Plane3<double>& plane) {
+  /// Moves the inliers of `plane` to the front of remaining_ (a stable partition); returns
+  /// their count. projected_ receives the inliers in `frame`'s plane coordinates (Eq. 1-3) times
+  /// `scale`, in order.
+  std::size_t split_inliers(const Plane3<double>& plane, const PlaneFrame<double>& frame,
+                            double scale) {
     const double thr = params_.distance_threshold;
-    std::size_t count = 0;  // stable partition through the reused others_ buffer
-    others_.clear();
-    for (std::size_t k = 0; k < remaining_.size(); ++k) {
-      const std::uint32_t i = remaining_[k];
-      if (std::abs(plane.signed_distance(points[i])) < thr)
-        remaining_[count++] = i;
-      else
-        others_.push_back(i);
+    const std::size_t n = remaining_.size();
+    if (others_.size() < n) others_.resize(n);
+    projected_.resize(n);
+    // Branch-free stable partition (whether a point is an inlier is close to random where the
+    // band crosses noisy surfaces): every point is written to both sides and the side it belongs
+    // to advances. Writes to remaining_ never pass the read position.
+    Point3d* const in = remaining_.data();
+    Point3d* const out = others_.data();
+    Point2d* const proj = projected_.data();
+    std::size_t count = 0, other = 0;
+    Point2d lo = Point2d::Constant(std::numeric_limits<double>::max()), hi = -lo;
+    // frame.to_plane's first two rows, inlined: x_plane = R (x - o), Eq. (10).
+    const Eigen::Matrix<double, 2, 3> rows = frame.world_to_plane.linear().topRows<2>();
+    const Point2d offset = frame.world_to_plane.translation().head<2>();
+    for (std::size_t k = 0; k < n; ++k) {
+      const Point3d p = in[k];
+      const bool inlier = std::abs(plane.signed_distance(p)) < thr;  // |delta| of Eq. (2)
+      const Point2d q = (rows * p + offset) * scale;
+      in[count] = p;
+      out[other] = p;
+      proj[count] = q;
+      const Point2d box = inlier ? q : lo;  // keeps the box of the inliers only
+      lo = lo.cwiseMin(box);
+      hi = hi.cwiseMax(inlier ? q : hi);
+      count += inlier ? 1 : 0;
+      other += inlier ? 0 : 1;
     }
-    std::copy(others_.begin(), others_.end(),
-              remaining_.begin() + static_cast<std::ptrdiff_t>(count));
+    std::copy(out, out + other, in + count);
+    projected_.resize(count);
+    lo_ = lo;
+    hi_ = hi;
     return count;
   }
 
-  /// Appends the surface points[remaining_[0 .. count)] on `plane`, its hull `polygon` given in
+  /// Appends the surface remaining_[0 .. count) on `plane`, its hull `polygon` given in
   /// `hull_frame` (the RANSAC plane's) re-expressed in the refitted plane's frame.
-  void emit(std::span<const Point3d> points, std::size_t count, const Plane3<double>& plane,
-            const PlaneFrame<double>& hull_frame, Polygon2<double> polygon,
-            std::vector<ExtractedPlane>& out) const {
+  void emit(std::size_t count, const Plane3<double>& plane, const PlaneFrame<double>& hull_frame,
+            Polygon2<double> polygon, std::vector<ExtractedPlane>& out) const {
     ExtractedPlane e;
     e.shape.plane = plane;
     e.shape.frame = PlaneFrame<double>::of(plane);
@@ -394,7 +414,7 @@ class PlaneExtractor {
     e.shape.polygon = std::move(polygon);
     double sum_sq = 0;
     for (std::size_t k = 0; k < count; ++k) {
-      const double delta = plane.signed_distance(points[remaining_[k]]);  // Eq. (2)
+      const double delta = plane.signed_distance(remaining_[k]);  // Eq. (2)
       sum_sq += delta * delta;
     }
     e.inliers = count;
@@ -404,11 +424,12 @@ class PlaneExtractor {
 
   PlaneExtractionParams params_;
   ConcaveHull hull_;
-  std::vector<std::uint32_t> remaining_;
+  std::vector<Point3d> remaining_;  // the cluster's points not yet in a plane
   std::vector<std::uint32_t> all_;
   std::vector<Point2d> projected_;
+  Point2d lo_, hi_;  // bounding box of projected_
   std::vector<std::int32_t> piece_;
-  std::vector<std::uint32_t> others_;
+  std::vector<Point3d> others_;
   std::vector<Point3d> subset_;
   std::vector<std::uint32_t> cells_;
   std::vector<std::uint32_t> cell_count_;

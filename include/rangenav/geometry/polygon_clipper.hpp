@@ -16,6 +16,7 @@
 //   disjoint, and possibly several when they touch only at points (each connected piece of the
 //   union's interior is one polygon). The total area is area(a) + area(b) - area(a ∩ b).
 
+#include <algorithm>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
@@ -117,18 +118,36 @@ template <class Scalar>
 
 namespace detail {
 
+// Whether one of up to 8 vertices spread over `ring` lies strictly inside `polygon`
+// (boost::geometry::within: in the interior, not on the boundary). A sample, not every vertex:
+// each test walks all of polygon's edges, and the answer only spares the overlay below.
+template <class Scalar, class Ring>
+bool sampled_vertex_within(const Ring& ring, const BoostPolygon2<Scalar>& polygon) {
+  const std::size_t stride = std::max<std::size_t>(1, ring.size() / 8);
+  for (std::size_t i = 0; i < ring.size(); i += stride)
+    if (boost::geometry::within(ring[i], polygon)) return true;
+  return false;
+}
+
 // Out of line so that the warning above is attributed to these bodies, inside the pragma.
 // As the paper does with Vatti's algorithm: the intersection, tested for a positive area, after
-// the cheap boost::geometry::intersects (no overlay) has found a common point at all. (A DE-9IM
-// relate, or intersects and not touches, would avoid the overlay, but their out-of-line bodies in
-// Boost trip the warning above.)
+// two cheap answers: disjoint bounding boxes (no overlap), and a vertex of one polygon strictly
+// inside the other (an overlap: every neighbourhood of a boundary point of b holds interior
+// points of b), the common case of two views of one surface. Then boost::geometry::intersects
+// (no overlay) and only for polygons that have a common point the overlay. (A DE-9IM relate with
+// the mask "T********" would decide without the overlay, 3x faster on the benchmark's star
+// polygons, but its out-of-line body in Boost trips the warning above where no pragma reaches.)
 template <class Scalar>
 [[gnu::noinline]] bool boost_interiors_intersect(const BoostPolygon2<Scalar>& a,
                                                  const BoostPolygon2<Scalar>& b) {
-  if (!boost::geometry::intersects(a, b)) return false;
-  boost::geometry::model::multi_polygon<BoostPolygon2<Scalar>> common;
-  boost::geometry::intersection(a, b, common);
-  return boost::geometry::area(common) > Scalar(0);
+  namespace bg = boost::geometry;
+  using Box = bg::model::box<BoostPoint2<Scalar>>;
+  if (bg::disjoint(bg::return_envelope<Box>(a), bg::return_envelope<Box>(b))) return false;
+  if (sampled_vertex_within(b.outer(), a) || sampled_vertex_within(a.outer(), b)) return true;
+  if (!bg::intersects(a, b)) return false;
+  bg::model::multi_polygon<BoostPolygon2<Scalar>> common;
+  bg::intersection(a, b, common);
+  return bg::area(common) > Scalar(0);
 }
 
 template <class Scalar>
@@ -140,10 +159,11 @@ template <class Scalar>
 
 }  // namespace detail
 
-/// The default PolygonClipper on Boost.Geometry (header-only): the intersection test is
-/// boost::geometry::intersects followed by boost::geometry::intersection (positive area?), the
-/// union is boost::geometry::union_. Boost 1.74
-/// rescales the coordinates to an integer grid internally for robust overlays.
+/// The default PolygonClipper on Boost.Geometry (header-only): the intersection test is a
+/// bounding-box test, a vertex-inside test, and where these do not decide
+/// boost::geometry::intersects followed by boost::geometry::intersection (positive area?); the
+/// union is boost::geometry::union_. Boost 1.74 rescales floating-point coordinates to an integer
+/// grid for robust overlays (unless the whole program defines BOOST_GEOMETRY_NO_ROBUSTNESS).
 /// Stateless and thread-safe.
 struct BoostGeometryClipper {
   /// True when the interiors of a and b overlap (positive intersection area). Throws

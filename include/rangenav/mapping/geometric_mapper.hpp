@@ -111,7 +111,8 @@ struct GeometricMapperParams {
   bool organized_clustering = true;
   EuclideanClusteringParams clustering{0.05, 500, std::numeric_limits<std::size_t>::max()};
   PlaneExtractionParams planes{};
-  /// Aggregation: the similarity thresholds t1, t2 of Eq. (6).
+  /// Aggregation: the similarity thresholds t1, t2 of Eq. (6) and where Eq. (6b) compares the
+  /// offsets (at the shapes' centroids by default, at the world origin as in the paper).
   GeometricMapParameters<double> merging{};
 
   void validate(std::string_view where) const {
@@ -235,17 +236,27 @@ class GeometricMapper {
     }
     const bool organized = params_.organized_clustering && params_.extraction_leaf == 0 &&
                            height > 1 && width * height == n;
-    world_.clear();
-    world_.reserve(n);
+    // The frame in the world: x_w = R x + t. A non-finite coordinate makes every coordinate of
+    // R x + t non-finite (inf * 0 is NaN), so the organised frame is transformed as it is, NaN
+    // pixels included, and counted by one coordinate.
+    const Eigen::Matrix3d rotation = report.pose.linear();
+    const Point3d translation = report.pose.translation();
     std::size_t finite = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Point3d p = traits::point(cloud, i).template cast<double>();
-      if (p.allFinite()) {
-        world_.push_back(report.pose * p);
-        ++finite;
-      } else if (organized) {
-        world_.push_back(Point3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+    if (organized) {
+      world_.resize(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        const Point3d w = rotation * traits::point(cloud, i).template cast<double>() + translation;
+        world_[i] = w;
+        finite += std::isfinite(w.x()) ? 1 : 0;
       }
+    } else {
+      world_.clear();
+      world_.reserve(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        const Point3d p = traits::point(cloud, i).template cast<double>();
+        if (p.allFinite()) world_.push_back(rotation * p + translation);
+      }
+      finite = world_.size();
     }
     extractor_.set_viewpoint(Point3d(report.pose.translation()));
     if (organized) {
