@@ -1,6 +1,10 @@
+#include <algorithm>
+#include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -33,6 +37,66 @@ TEST_CASE("voxel_downsample replaces each voxel by its centroid", "[mapping]") {
   CHECK_THROWS_WITH(voxel_downsample(pts, 0.0),
                     "rangenav: voxel_downsample: argument 'leaf_size' = 0 must be finite and > 0");
   CHECK(voxel_downsample(std::vector<Eigen::Vector2d>{}, 0.1).empty());
+}
+
+namespace {
+// The voxel filter's definition, by brute force: the centroid of the finite points of every cell
+// floor(p / leaf) (summed in input order), ordered by cell; points beyond 2^20 cells skipped.
+template <int D, class Scalar>
+std::vector<Point<D, Scalar>> reference_voxels(const std::vector<Point<D, Scalar>>& pts,
+                                               Scalar leaf) {
+  std::map<std::array<std::int64_t, D>, std::pair<Point<D, Scalar>, std::size_t>> cells;
+  for (const auto& p : pts) {
+    std::array<std::int64_t, D> key{};
+    bool ok = p.allFinite();
+    for (int d = 0; d < D && ok; ++d) {
+      const Scalar c = std::floor(p[d] * (Scalar(1) / leaf));
+      ok = c > -Scalar(1 << 20) && c < Scalar((1 << 20) - 1);
+      key[static_cast<std::size_t>(d)] = ok ? static_cast<std::int64_t>(c) : 0;
+    }
+    if (!ok) continue;
+    auto& [sum, count] = cells.try_emplace(key, Point<D, Scalar>::Zero(), 0).first->second;
+    sum += p;
+    ++count;
+  }
+  std::vector<Point<D, Scalar>> out;
+  for (const auto& [key, cell] : cells)
+    out.push_back(cell.first / static_cast<Scalar>(cell.second));
+  return out;
+}
+}  // namespace
+
+TEST_CASE("voxel_downsample equals the brute-force centroids of its cells", "[mapping]") {
+  // Runs of points in one voxel (an organised frame's rows), revisited voxels, points exactly
+  // on cell faces (negative too), NaN / infinite points and coordinates beyond the 2^20 cells.
+  std::mt19937 rng(17);
+  std::normal_distribution<double> noise(0.0, 0.004);
+  std::vector<Eigen::Vector3d> frame;
+  for (int row = 0; row < 60; ++row)
+    for (int col = 0; col < 80; ++col) {
+      const double x = -1.0 + 0.01 * col, z = -0.3 + 0.01 * row;
+      frame.emplace_back(x, 2.0 + 0.3 * x + noise(rng), z);
+    }
+  for (const double v : {0.0, 0.25, -0.25, 0.5, -0.5, 1e-17, -1e-17})
+    frame.emplace_back(v, -v, v);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  frame.insert(frame.begin() + 100, Eigen::Vector3d(nan, 0, 0));
+  frame.insert(frame.begin() + 200, Eigen::Vector3d(0, inf, 0));
+  frame.emplace_back(1e6, 0, 0);  // cell 4e6: beyond 2^20, skipped
+  frame.emplace_back(-1e6, 0, 0);
+  for (const double leaf : {0.05, 0.25, 0.013}) {
+    const auto out = voxel_downsample(frame, leaf);
+    CHECK(out == reference_voxels<3>(frame, leaf));
+    std::vector<Eigen::Vector3d> shuffled = frame;
+    std::shuffle(shuffled.begin(), shuffled.end(), rng);
+    CHECK(voxel_downsample(shuffled, leaf) == reference_voxels<3>(shuffled, leaf));
+  }
+  std::vector<Eigen::Vector2f> plane;
+  std::uniform_real_distribution<float> u(-3.0f, 3.0f);
+  for (int i = 0; i < 3000; ++i)
+    plane.emplace_back(u(rng), u(rng));
+  CHECK(voxel_downsample(plane, 0.2f) == reference_voxels<2>(plane, 0.2f));
 }
 
 TEST_CASE("KeyFrameSelector: 0.5 m or 25 degrees", "[mapping]") {
@@ -282,6 +346,57 @@ TEST_CASE("SparsePointMap keeps the normals of its walls", "[mapping]") {
   params.normal_neighbors = 1;
   CHECK_THROWS_WITH(SparsePointMap<2>(params),
                     "rangenav: SparsePointMap: argument 'normal_neighbors' = 1 must be >= 2");
+}
+
+TEST_CASE("SparsePointMap refreshes exactly the normals its insertions change", "[mapping]") {
+  // Inserted in batches, each point's normal must be the PCA normal of its k nearest map points
+  // within normal_radius in the final map (brute force), though only the points whose k nearest
+  // changed are recomputed per batch.
+  SparsePointMapParams<double> params;
+  params.epsilon_d = 0.05;
+  params.deduplicate_within_scan = false;
+  params.normals = true;
+  params.normal_neighbors = 10;
+  params.normal_radius = 0.2;
+  SparsePointMap<3> map(params);
+  std::mt19937 rng(4);
+  const auto room = test::room_3d(rng, 3000);
+  std::vector<Eigen::Vector3d> batch;
+  for (std::size_t i = 0; i < room.size(); ++i) {
+    batch.push_back(room[i]);
+    if (batch.size() == room.size() / 5 || i + 1 == room.size()) {
+      map.insert(batch);
+      batch.clear();
+    }
+  }
+  const BruteForceSearch<3, double> brute(map.points());
+  std::vector<Neighbor<double>> nbs;
+  std::size_t planar = 0;
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    brute.knn(map.points()[i], 10, nbs, 0.2 * 0.2);
+    Eigen::Vector3d expected = Eigen::Vector3d::Zero();
+    if (nbs.size() >= 3) {
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (const auto& nb : nbs)
+        mean += map.points()[nb.index];
+      mean /= static_cast<double>(nbs.size());
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+      for (const auto& nb : nbs)
+        cov += (map.points()[nb.index] - mean) * (map.points()[nb.index] - mean).transpose();
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+      eig.computeDirect(cov);
+      if (eig.eigenvalues()(0) <= 0.1 * eig.eigenvalues()(2))
+        expected = eig.eigenvectors().col(0).normalized();
+    }
+    const Eigen::Vector3d n = map.normals()[i];
+    if (expected.isZero()) {
+      CHECK(n.isZero());
+    } else {
+      CHECK(std::abs(n.dot(expected)) > 1 - 1e-9);
+      ++planar;
+    }
+  }
+  CHECK(planar > map.size() * 9 / 10);
 }
 
 TEST_CASE("LaserSlamMapper tracks through odometry that freezes and then jumps", "[mapping]") {

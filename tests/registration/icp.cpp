@@ -560,6 +560,103 @@ TEST_CASE("FrustumRejector culls data outside the model frustum every iteration"
   CHECK(pairs[0].model_index == 2);
 }
 
+TEST_CASE("FrustumRejector's 3D test is Frustum::contains", "[registration]") {
+  Frustum<3, double> f;
+  f.near = 0.3;
+  f.far = 6.0;
+  f.horizontal_fov = 57.0 * std::numbers::pi / 180;
+  f.vertical_fov = 43.0 * std::numbers::pi / 180;
+  f.pose = make_transform3(0.5, -0.2, 0.3, 0.1, -0.2, 0.4);
+  FrustumRejector<3, double> in_model(f);  // data_in_model_frustum: admits()
+  in_model.begin(0, 0);
+  FrustumRejector<3, double> in_data(f, FrustumRejector<3, double>::Mode::model_in_data_frustum);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-7.0, 7.0);
+  std::vector<Correspondence<3, double>> pairs;
+  std::size_t inside = 0;
+  for (std::uint32_t i = 0; i < 20000; ++i) {
+    const Eigen::Vector3d p(u(rng), u(rng), u(rng) / 3);
+    const bool expected = f.contains(p);
+    inside += expected ? 1 : 0;
+    CHECK(in_model.admits(IcpContext<3, double>{}, p) == expected);
+    pairs.push_back({p, p, 0, i, i});
+  }
+  REQUIRE(inside > 500);
+  // model_in_data_frustum keeps exactly the pairs whose model point is inside (identity
+  // estimate: the data sensor's frustum is f itself).
+  IcpContext<3, double> ctx{0, Transform3d::Identity(), 0, 0};
+  in_data.reject(ctx, pairs);
+  CHECK(pairs.size() == inside);
+  for (const auto& c : pairs)
+    CHECK(f.contains(c.model));
+}
+
+TEST_CASE("ICP's neighbour reuse forms the pairs of a search in every iteration",
+          "[registration]") {
+  // reuse_neighbors skips the search of a data point whose nearest model point is provably
+  // unchanged; the reference searches every data point every iteration. Same pairs, so the
+  // same transform, bit for bit, with fewer searches.
+  const auto same = [](const auto& fast, const auto& reference) {
+    CHECK(fast.transform.matrix() == reference.transform.matrix());
+    CHECK(fast.iterations == reference.iterations);
+    CHECK(fast.matched_count == reference.matched_count);
+    CHECK(fast.inlier_count == reference.inlier_count);
+    CHECK(fast.reason == reference.reason);
+    // At most one search per data point and iteration (fewer when the frustum culls).
+    CHECK(reference.neighbor_searches <=
+          static_cast<std::size_t>(reference.iterations) * reference.data_count);
+    CHECK(fast.neighbor_searches < reference.neighbor_searches * 3 / 4);
+  };
+  SECTION("2D, decaying threshold and unique pairs") {
+    const auto room = test::room_2d();
+    const KdTree<2, double> tree(room);
+    for (const auto& truth :
+         {make_transform2(0.2, -0.1, 0.08), make_transform2(-0.3, 0.2, -0.12)}) {
+      const auto data = test::transformed<2>(room, truth.inverse(Eigen::Isometry));
+      PaperIcp<2> fast, reference;
+      reference.params.reuse_neighbors = false;
+      const auto a = fast.align(tree, data), b = reference.align(tree, data);
+      same(a, b);
+      CHECK(transform_error<2>(a.transform, truth).first < 1e-3);
+    }
+  }
+  SECTION("3D, frustum culling of the data and noise, double and float") {
+    std::mt19937 rng(9);
+    const auto room = test::room_3d(rng, 1500);
+    std::normal_distribution<double> noise(0.0, 0.005);
+    const auto truth = make_transform3(0.12, -0.08, 0.05, 0.03, -0.02, 0.1);
+    std::vector<Eigen::Vector3d> data = test::transformed<3>(room, truth.inverse(Eigen::Isometry));
+    for (auto& p : data)
+      p += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    Frustum<3, double> f;
+    f.far = 3.5;
+    f.horizontal_fov = 2.0;
+    f.vertical_fov = 2.0;
+    f.pose = make_transform3(-1.0, 0.0, 1.5, 0, 0, 0.3);
+    using Culled = Icp<3, double, DecayingDistanceRejector<double>, FrustumRejector<3, double>>;
+    Culled fast, reference;
+    for (Culled* icp : {&fast, &reference}) {
+      icp->rejector<DecayingDistanceRejector<double>>() = {0.5, 0.05, 0.7};
+      icp->rejector<FrustumRejector<3, double>>().frustum = f;
+    }
+    reference.params.reuse_neighbors = false;
+    const KdTree<3, double> tree(room);
+    const auto a = fast.align(tree, data), b = reference.align(tree, data);
+    same(a, b);
+    CHECK(transform_error<3>(a.transform, truth).first < 0.01);
+
+    std::vector<Eigen::Vector3f> room_f, data_f;
+    for (const auto& p : room)
+      room_f.push_back(p.cast<float>());
+    for (const auto& p : data)
+      data_f.push_back(p.cast<float>());
+    const KdTree<3, float> tree_f(room_f);
+    PaperIcp<3, float> fast_f, reference_f;
+    reference_f.params.reuse_neighbors = false;
+    same(fast_f.align(tree_f, data_f), reference_f.align(tree_f, data_f));
+  }
+}
+
 TEST_CASE("ICP reports a featureless corridor as degenerate", "[registration]") {
   const auto model = test::corridor_2d();
   const KdTree<2, double> tree(model);

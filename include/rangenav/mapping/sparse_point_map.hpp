@@ -20,6 +20,7 @@
 // about 30 B per point in 2D; memory_bytes() reports the exact figure.
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
@@ -138,28 +139,46 @@ class SparsePointMap {
       return Index();
   }
 
-  // Normals of the new points [first, size) and of every stored point within normal_radius of
-  // one (their k nearest neighbours may have changed).
+  // Normals of the new points [first, size) and of every stored point whose k nearest
+  // neighbours changed. A stored point's k-NN (within normal_radius) changes exactly when a
+  // new point comes closer than its `reach` (its k-th neighbour's distance, or normal_radius
+  // while it has fewer than k), so only those are recomputed. The k-NN of a new point are the
+  // k nearest of its normal_radius neighbourhood, which the dirtiness test queries anyway.
   void update_normals(std::size_t first) {
     const Scalar radius_sq = params_.normal_radius * params_.normal_radius;
-    normals_.resize(tree_.size(), point_type::Zero());
-    dirty_.assign(tree_.size(), 0);
-    for (std::size_t i = first; i < tree_.size(); ++i) {
+    const std::size_t size = tree_.size();
+    normals_.resize(size, point_type::Zero());
+    reach_sq_.resize(size, radius_sq);
+    dirty_.assign(first, 0);
+    const auto closer = [](const Neighbor<Scalar>& a, const Neighbor<Scalar>& b) {
+      return a.distance_sq < b.distance_sq || (a.distance_sq == b.distance_sq && a.index < b.index);
+    };
+    for (std::size_t i = first; i < size; ++i) {
       // Only which points are near matters here, not their order.
       if constexpr (requires { tree_.radius(tree_.point(i), radius_sq, neighbors_, false); })
         tree_.radius(tree_.point(i), radius_sq, neighbors_, false);
       else
         tree_.radius(tree_.point(i), radius_sq, neighbors_);
       for (const auto& nb : neighbors_)
-        dirty_[nb.index] = 1;
-      dirty_[i] = 1;
+        if (nb.index < first && nb.distance_sq < reach_sq_[nb.index]) dirty_[nb.index] = 1;
+      const std::size_t k = std::min(params_.normal_neighbors, neighbors_.size());
+      std::partial_sort(neighbors_.begin(), neighbors_.begin() + static_cast<std::ptrdiff_t>(k),
+                        neighbors_.end(), closer);
+      neighbors_.resize(k);
+      normals_[i] = normal_of_neighbors(i, radius_sq);
     }
-    for (std::size_t i = 0; i < tree_.size(); ++i)
-      if (dirty_[i] != 0) normals_[i] = normal_at(tree_.point(i), radius_sq);
+    for (std::size_t i = 0; i < first; ++i)
+      if (dirty_[i] != 0) {
+        tree_.knn(tree_.point(i), params_.normal_neighbors, neighbors_, radius_sq);
+        normals_[i] = normal_of_neighbors(i, radius_sq);
+      }
   }
 
-  point_type normal_at(const point_type& q, Scalar radius_sq) {
-    const std::size_t k = tree_.knn(q, params_.normal_neighbors, neighbors_, radius_sq);
+  // The PCA normal of point i from its k nearest neighbours in neighbors_ (ascending); records
+  // its reach (see update_normals).
+  point_type normal_of_neighbors(std::size_t i, Scalar radius_sq) {
+    const std::size_t k = neighbors_.size();
+    reach_sq_[i] = k == params_.normal_neighbors ? neighbors_.back().distance_sq : radius_sq;
     if (k < static_cast<std::size_t>(D)) return point_type::Zero();
     point_type mean = point_type::Zero();
     for (const auto& nb : neighbors_)
@@ -232,6 +251,7 @@ class SparsePointMap {
   std::unordered_map<std::uint64_t, std::uint32_t> grid_;
   std::vector<std::uint32_t> next_;
   std::vector<point_type> normals_;
+  std::vector<Scalar> reach_sq_;  ///< per point: squared distance of its k-th normal neighbour
   std::vector<unsigned char> dirty_;
   std::vector<Neighbor<Scalar>> neighbors_;
 };

@@ -95,11 +95,19 @@ struct FrustumRejector {
   explicit FrustumRejector(const Frustum<D, Scalar>& f, Mode m = Mode::data_in_model_frustum)
       : frustum(f), mode(m) {}
 
-  /// Caches the frustum's inverse pose; ICP calls it at the start of every alignment.
-  void begin(std::size_t, std::size_t) { model_to_sensor_ = frustum.pose.inverse(Eigen::Isometry); }
+  /// Caches the frustum's inverse pose and, in 3D, the tangents of its half opening angles;
+  /// ICP calls it at the start of every alignment.
+  void begin(std::size_t, std::size_t) {
+    model_to_sensor_ = frustum.pose.inverse(Eigen::Isometry);
+    if constexpr (D == 3) {
+      tan_half_h_ = std::tan(frustum.horizontal_fov / 2);
+      tan_half_v_ = std::tan(frustum.vertical_fov / 2);
+    }
+  }
 
   [[nodiscard]] bool admits(const IcpContext<D, Scalar>&, const Point<D, Scalar>& p) const {
-    return mode != Mode::data_in_model_frustum || frustum.contains_local(model_to_sensor_ * p);
+    return mode != Mode::data_in_model_frustum ||
+           contains_local(model_to_sensor_ * p, tan_half_h_, tan_half_v_);
   }
 
   void reject(const IcpContext<D, Scalar>& ctx,
@@ -107,13 +115,30 @@ struct FrustumRejector {
     if (mode != Mode::model_in_data_frustum) return;
     // The data sensor's frustum placed in the model frame by the current estimate.
     const Transform<D, Scalar> to_sensor = (ctx.transform * frustum.pose).inverse(Eigen::Isometry);
+    Scalar tan_h = 0, tan_v = 0;
+    if constexpr (D == 3) {
+      tan_h = std::tan(frustum.horizontal_fov / 2);
+      tan_v = std::tan(frustum.vertical_fov / 2);
+    }
     std::erase_if(pairs, [&](const Correspondence<D, Scalar>& c) {
-      return !frustum.contains_local(to_sensor * c.model);
+      return !contains_local(to_sensor * c.model, tan_h, tan_v);
     });
   }
 
  private:
+  // Frustum::contains_local with the tangents of the half opening angles given (the same test
+  // without two tan() calls per point).
+  [[nodiscard]] bool contains_local(const Point<D, Scalar>& p, Scalar tan_h, Scalar tan_v) const {
+    if constexpr (D == 2) {
+      return frustum.contains_local(p);
+    } else {
+      if (p.x() < frustum.near || p.x() > frustum.far) return false;
+      return std::abs(p.y()) <= p.x() * tan_h && std::abs(p.z()) <= p.x() * tan_v;
+    }
+  }
+
   Transform<D, Scalar> model_to_sensor_ = Transform<D, Scalar>::Identity();
+  Scalar tan_half_h_ = 0, tan_half_v_ = 0;
 };
 
 }  // namespace rangenav

@@ -80,6 +80,14 @@ struct IcpParams {
   Scalar degeneracy_threshold = Scalar(0.01);
   /// Neighbours for the model normals of the degeneracy check; 0 = 5 in 2D, 10 in 3D.
   std::size_t normal_neighbors = 0;
+  /// Skip the correspondence search of a data point whose nearest model point is provably
+  /// among the `reuse_candidates` nearest of its last search (see BasicIcp::match): the pairs,
+  /// and so the result, are those of a search every iteration; false searches every time (the
+  /// reference).
+  bool reuse_neighbors = true;
+  /// Model points kept per data point for reuse_neighbors (>= 2): more make a search costlier
+  /// but let it serve larger moves of the estimate.
+  std::size_t reuse_candidates = 2;
 
   void validate() const {
     constexpr std::string_view where = "IcpParams";
@@ -88,6 +96,8 @@ struct IcpParams {
     detail::require_non_negative(where, "translation_epsilon", translation_epsilon);
     detail::require_non_negative(where, "rotation_epsilon", rotation_epsilon);
     detail::require_non_negative(where, "degeneracy_threshold", degeneracy_threshold);
+    if (reuse_neighbors && reuse_candidates < 2)
+      detail::throw_invalid_argument(where, "reuse_candidates", reuse_candidates, "must be >= 2");
   }
 };
 
@@ -103,7 +113,10 @@ struct IcpResult {
   std::size_t matched_count = 0;  ///< data points the last search paired (before rejectors)
   std::size_t inlier_count = 0;   ///< pairs kept by the rejectors in the last iteration
   std::size_t data_count = 0;     ///< finite data points
-  Scalar rmse = 0;                ///< RMS distance of the kept pairs under the final transform (m)
+  /// Correspondence searches run on the model (at most iterations x data_count; fewer when
+  /// IcpParams::reuse_neighbors proved a data point's nearest model point unchanged).
+  std::size_t neighbor_searches = 0;
+  Scalar rmse = 0;  ///< RMS distance of the kept pairs under the final transform (m)
   /// matched_count / data_count: the fraction of data points with a model point within the
   /// search bound (Open3D's fitness). With a unique-pair rejector and a sparser model,
   /// inlier_count / data_count would be bounded by the density ratio instead.
@@ -206,7 +219,7 @@ class BasicIcp {
       ctx.iteration = it;
       ctx.transform = transform;
       result.iterations = it + 1;
-      match(model, ctx);
+      result.neighbor_searches += match(model, ctx);
       result.matched_count = pairs_.size();
       std::apply([&](auto&... r) { (reject_with(r, ctx), ...); }, rejectors);
       if (pairs_.size() < min_pairs) {
@@ -255,23 +268,83 @@ class BasicIcp {
     return result;
   }
 
+  // The pairs of one iteration; returns the number of model searches run.
   template <class Model>
-  void match(const Model& model, const IcpContext<D, Scalar>& ctx) {
+  std::size_t match(const Model& model, const IcpContext<D, Scalar>& ctx) {
     Scalar bound_sq = unbounded_sq<Scalar>;
     std::apply([&](const auto&... r) { ((bound_sq = std::min(bound_sq, bound_of(r, ctx))), ...); },
                rejectors);
     pairs_.clear();
     const auto& t = ctx.transform;
+    const bool reuse = params.reuse_neighbors && std::isfinite(bound_sq);
+    const std::size_t candidates = params.reuse_candidates;
+    if (reuse && ctx.iteration == 0) {
+      cache_.assign(data_.size(), {});
+      candidates_.resize(data_.size() * candidates);
+    }
+    const Scalar bound = std::sqrt(bound_sq);
+    std::size_t searches = 0;
     for (std::size_t j = 0; j < data_.size(); ++j) {
       const point_type p = t * data_[j];
       bool admitted = true;
       std::apply([&](const auto&... r) { ((admitted = admitted && admits(r, ctx, p)), ...); },
                  rejectors);
       if (!admitted) continue;
-      if (const auto nb = model.nearest(p, bound_sq))
-        pairs_.push_back(
-            {data_[j], model.point(nb->index), nb->distance_sq, data_index_[j], nb->index});
+      if (!reuse) {
+        ++searches;
+        if (const auto nb = model.nearest(p, bound_sq))
+          pairs_.push_back(
+              {data_[j], model.point(nb->index), nb->distance_sq, data_index_[j], nb->index});
+        continue;
+      }
+      // Reuse of the last search of this data point, made at `query`, which found the
+      // candidates (its k nearest model points within the bound) and proved every other model
+      // point at least `others` away. The point has since moved by delta, so every other model
+      // point is now at least others - delta away (triangle inequality): if the closest
+      // candidate is nearer than that, it is the nearest model point; if there was none and
+      // others - delta reaches the bound, there is none.
+      NeighborCache& c = cache_[j];
+      if (c.count != no_cache) {
+        const Scalar delta = (p - c.query).norm();
+        const Scalar margin = Scalar(64) * std::numeric_limits<Scalar>::epsilon() *
+                              (Scalar(1) + p.template lpNorm<Eigen::Infinity>() + c.others);
+        const Scalar reach = c.others - delta - margin;
+        if (c.count == 0) {
+          if (reach >= bound) continue;
+        } else {
+          std::uint32_t best = 0;
+          Scalar best_sq = std::numeric_limits<Scalar>::infinity();
+          for (std::uint32_t k = 0; k < c.count; ++k) {
+            const std::uint32_t index = candidates_[j * candidates + k];
+            const point_type& m = model.point(index);
+            Scalar d_sq = 0;  // summed per axis in order, as the kd-tree's metric does
+            for (int d = 0; d < D; ++d)
+              d_sq += (p[d] - m[d]) * (p[d] - m[d]);
+            if (d_sq < best_sq) {
+              best_sq = d_sq;
+              best = index;
+            }
+          }
+          if (std::sqrt(best_sq) < reach) {
+            if (best_sq < bound_sq)
+              pairs_.push_back({data_[j], model.point(best), best_sq, data_index_[j], best});
+            continue;
+          }
+        }
+      }
+      // The k nearest within the bound: the first pairs, the k-th bounds the others.
+      ++searches;
+      model.knn(p, candidates, knn_, bound_sq);
+      c.query = p;
+      c.count = static_cast<std::uint32_t>(knn_.size());
+      c.others = knn_.size() == candidates ? std::sqrt(knn_.back().distance_sq) : bound;
+      for (std::size_t k = 0; k < knn_.size(); ++k)
+        candidates_[j * candidates + k] = knn_[k].index;
+      if (!knn_.empty())
+        pairs_.push_back({data_[j], model.point(knn_[0].index), knn_[0].distance_sq, data_index_[j],
+                          knn_[0].index});
     }
+    return searches;
   }
 
   /// The normal equations J^T J of point-to-plane ICP at the solution, rows
@@ -370,8 +443,18 @@ class BasicIcp {
     if constexpr (detail::HasBegin<R>) r.begin(model_size, data_.size());
   }
 
+  static constexpr std::uint32_t no_cache = std::numeric_limits<std::uint32_t>::max();
+  /// The last correspondence search of one data point (see match()).
+  struct NeighborCache {
+    std::uint32_t count = no_cache;         ///< candidates found (no_cache: not searched yet)
+    Scalar others = 0;                      ///< every other model point was at least this far
+    point_type query = point_type::Zero();  ///< where it was searched (model frame)
+  };
+
   std::vector<point_type> data_;
   std::vector<std::uint32_t> data_index_;
+  std::vector<NeighborCache> cache_;
+  std::vector<std::uint32_t> candidates_;  ///< reuse_candidates model indices per data point
   std::vector<correspondence_type> pairs_;
   std::vector<Neighbor<Scalar>> knn_;
 };

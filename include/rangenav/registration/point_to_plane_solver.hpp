@@ -90,35 +90,49 @@ struct PointToPlaneSolver {
   [[nodiscard]] std::optional<Transform<3, Scalar>> refine(
       std::span<const Correspondence<3, Scalar>> pairs, Transform<3, Scalar> t) const {
     for (int step = 0; step < gauss_newton_steps; ++step) {
-      Vector3 c = Vector3::Zero();
+      // One pass over the pairs: with u_i = s_i x n_i, the row of Low's Eq. (6-8),
+      //   a_i = [(s_i - c) x n_i / L, n_i] = M g_i,  g_i = [u_i, n_i],
+      //   M = [[I / L, -[c]x / L], [0, I]],
+      // is linear in g_i, so sum a_i a_i^T = M (sum g_i g_i^T) M^T and sum a_i r_i =
+      // M sum g_i r_i; the centroid c and the RMS radius L come from the sums of s_i and |s_i|^2
+      // of the same pass. The s_i are taken relative to the first one (o) to keep those sums
+      // well conditioned far from the origin.
+      Matrix6 g_g = Matrix6::Zero();
+      Vector6 g_r = Vector6::Zero();
+      Vector3 sum = Vector3::Zero();
+      Scalar sum_sq = 0;
       std::size_t rows = 0;
-      for (const auto& pr : pairs)
-        if (has_normal(pr)) {
-          c += t * pr.data;
-          ++rows;
-        }
-      if (rows < min_plane_pairs) return step == 0 ? std::nullopt : std::optional(t);
-      c /= static_cast<Scalar>(rows);
-      // Rotations scaled by the RMS radius L of the points about c, so that the eigenvalues of
-      // the normal equations are unit-free (as in BasicIcp's degeneracy check).
-      Scalar radius_sq = 0;
-      for (const auto& pr : pairs)
-        if (has_normal(pr)) radius_sq += (t * pr.data - c).squaredNorm();
-      const Scalar radius = std::sqrt(radius_sq / static_cast<Scalar>(rows));
-      if (!(radius > Scalar(0))) break;
-      Matrix6 h = Matrix6::Zero();
-      Vector6 b = Vector6::Zero();
+      Vector3 o = Vector3::Zero();
       for (const auto& pr : pairs) {
         if (!has_normal(pr)) continue;
         const Vector3& n = model_normals[pr.model_index];
-        const Vector3 s = t * pr.data;
-        Vector6 a;
-        a.template head<3>() = (s - c).cross(n) / radius;
-        a.template tail<3>() = n;
-        const Scalar r = n.dot(s - pr.model);
-        h.noalias() += a * a.transpose();
-        b.noalias() += a * r;
+        const Vector3 s_world = t * pr.data;
+        if (rows == 0) o = s_world;
+        const Vector3 s = s_world - o;
+        Vector6 g;
+        g.template head<3>() = s.cross(n);
+        g.template tail<3>() = n;
+        g_g.noalias() += g * g.transpose();
+        g_r.noalias() += g * n.dot(s_world - pr.model);
+        sum += s;
+        sum_sq += s.squaredNorm();
+        ++rows;
       }
+      if (rows < min_plane_pairs) return step == 0 ? std::nullopt : std::optional(t);
+      const Vector3 c_rel = sum / static_cast<Scalar>(rows);
+      const Vector3 c = c_rel + o;
+      // Rotations scaled by the RMS radius L of the points about c, so that the eigenvalues of
+      // the normal equations are unit-free (as in BasicIcp's degeneracy check).
+      const Scalar radius =
+          std::sqrt(std::max(Scalar(0), sum_sq / static_cast<Scalar>(rows) - c_rel.squaredNorm()));
+      if (!(radius > Scalar(0))) break;
+      Matrix6 m = Matrix6::Identity();
+      m.template topLeftCorner<3, 3>() /= radius;
+      Eigen::Matrix<Scalar, 3, 3> c_cross;
+      c_cross << 0, -c_rel.z(), c_rel.y(), c_rel.z(), 0, -c_rel.x(), -c_rel.y(), c_rel.x(), 0;
+      m.template topRightCorner<3, 3>() = -c_cross / radius;
+      const Matrix6 h = m * g_g * m.transpose();
+      const Vector6 b = m * g_r;
       // Truncated solution: only along eigenvectors whose eigenvalue is at least
       // `degeneracy_ratio` times the largest; a direction no plane constrains (the axis of a
       // corridor, the in-plane motions over a lone floor) keeps the start's value instead of
