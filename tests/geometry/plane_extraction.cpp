@@ -227,8 +227,11 @@ TEST_CASE("organized_euclidean_clusters equals brute-force 8-neighbour component
         if (cl.size() >= min_size && cl.size() <= 200) reference.push_back(cl);
       std::stable_sort(reference.begin(), reference.end(),
                        [](const auto& a, const auto& b) { return a.size() > b.size(); });
+      std::size_t finite = 0;
       CHECK(organized_euclidean_clusters(std::span<const Point3d>(pts), width, height,
-                                         {tol, min_size, 200}) == reference);
+                                         {tol, min_size, 200}, &finite) == reference);
+      CHECK(finite == static_cast<std::size_t>(std::count_if(
+                          pts.begin(), pts.end(), [](const Point3d& p) { return p.allFinite(); })));
     }
   }
 }
@@ -618,6 +621,41 @@ TEST_CASE("PlaneExtractor scores hypotheses on a subset and finds the same plane
       CHECK(plane->shape.area() == Approx(area).epsilon(0.06));
     }
   }
+}
+
+TEST_CASE("PlaneExtractor with a pose equals extraction on the transformed points", "[geometry]") {
+  // The mapper hands sensor-frame points and the sensor pose; the extractor transforms each
+  // cluster point as it copies it. Reference: the points transformed beforehand (x_w = R x + t),
+  // the same seed: the same planes (normals, offsets, hulls, inliers) up to rounding.
+  const auto world = room_corner(0.005, 11);
+  Transform3d pose = Transform3d::Identity();
+  pose.linear() = Eigen::AngleAxisd(0.7, Point3d(0.2, -0.5, 1).normalized()).toRotationMatrix();
+  pose.translation() = Point3d(1.5, -2.0, 0.4);
+  std::vector<Point3d> local(world.size());
+  for (std::size_t i = 0; i < world.size(); ++i)
+    local[i] = pose.inverse() * world[i];
+  std::vector<Point3d> again(world.size());  // the reference's own world points
+  for (std::size_t i = 0; i < world.size(); ++i)
+    again[i] = pose.linear() * local[i] + pose.translation();
+  std::vector<std::uint32_t> all(world.size());
+  std::iota(all.begin(), all.end(), 0u);
+  PlaneExtractionParams params;
+  params.min_inliers = 200;
+  std::vector<ExtractedPlane> by_pose, reference;
+  std::mt19937 rng1(3), rng2(3);
+  PlaneExtractor(params).extract(local, all, pose, rng1, by_pose);
+  PlaneExtractor(params).extract(again, all, rng2, reference);
+  REQUIRE(reference.size() == 3);
+  REQUIRE(by_pose.size() == reference.size());
+  for (std::size_t k = 0; k < reference.size(); ++k) {
+    CHECK(by_pose[k].inliers == reference[k].inliers);
+    CHECK(by_pose[k].shape.plane.normal.isApprox(reference[k].shape.plane.normal, 1e-12));
+    CHECK(by_pose[k].shape.plane.d == Approx(reference[k].shape.plane.d).margin(1e-12));
+    CHECK(by_pose[k].shape.area() == Approx(reference[k].shape.area()).epsilon(1e-12));
+  }
+  // The room corner's floor and wall, found in the world frame.
+  CHECK(find_plane(by_pose, {0, 0, 1}, 0.0) != nullptr);
+  CHECK(find_plane(by_pose, {1, 0, 0}, 0.0) != nullptr);
 }
 
 TEST_CASE("PlaneExtractor stops on small clusters and rejects bad input", "[geometry]") {

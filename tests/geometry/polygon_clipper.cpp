@@ -232,6 +232,12 @@ TEMPLATE_TEST_CASE("PolygonClipper: overlaps with no vertex of one inside the ot
     CHECK(u[0].area() == Approx(0.4 + 0.4 - 0.04));
     CHECK(u[0].outer.size() == 12);
   }
+  SECTION("a polygon without area (collinear vertices) inside a square overlaps nothing") {
+    const auto square = poly(rect(0, 0, 2, 2));
+    const auto flat = poly({{0.5, 1}, {1, 1}, {1.5, 1}});
+    CHECK_FALSE(clipper.intersects(square, flat));
+    CHECK_FALSE(clipper.intersects(flat, square));
+  }
   SECTION("a square inside the L's bounding box but off the L") {
     const auto off = poly(rect(2, 2, 3, 3));
     CHECK_FALSE(clipper.intersects(l_shape(), off));

@@ -116,12 +116,13 @@ template <RadiusSearch S>
 /// points are no points): two points are chained when they are image neighbours (8-neighbourhood)
 /// closer than params.tolerance. Each cluster lists its point indices in increasing order;
 /// clusters ordered by size, largest first (ties: smallest first index first), as
-/// euclidean_clusters. Throws invalid_argument for bad parameters or when width * height is not
+/// euclidean_clusters. When `finite_points` is given it receives the number of points (finite
+/// pixels). Throws invalid_argument for bad parameters or when width * height is not
 /// points.size().
 template <class Scalar>
 [[nodiscard]] std::vector<std::vector<std::uint32_t>> organized_euclidean_clusters(
     std::span<const Point<3, Scalar>> points, std::size_t width, std::size_t height,
-    const EuclideanClusteringParams& params = {}) {
+    const EuclideanClusteringParams& params = {}, std::size_t* finite_points = nullptr) {
   constexpr std::string_view where = "organized_euclidean_clusters";
   params.validate(where);
   if (width * height != points.size())
@@ -208,6 +209,7 @@ template <class Scalar>
   // root), then one bucket per admitted component (count[root] becomes its bucket), then the
   // runs' pixels appended run by run, which keeps every bucket in increasing index order.
   std::vector<std::uint32_t> count(n, 0);
+  std::size_t total = 0;
   for (std::size_t r = 0; r < height; ++r)
     for (std::size_t i = r * width, end = i + width; i < end;) {
       std::size_t j = i + 1;
@@ -216,9 +218,11 @@ template <class Scalar>
       if (run[i] == i) {
         parent[i] = find(static_cast<std::uint32_t>(i));
         count[parent[i]] += static_cast<std::uint32_t>(j - i);
+        total += j - i;
       }
       i = j;
     }
+  if (finite_points) *finite_points = total;
   std::vector<std::vector<std::uint32_t>> clusters;
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t size = count[i];

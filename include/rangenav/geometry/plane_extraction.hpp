@@ -124,8 +124,39 @@ class PlaneExtractor {
   template <class Engine>
   std::size_t extract(std::span<const Point3d> points, std::span<const std::uint32_t> cluster,
                       Engine& rng, std::vector<ExtractedPlane>& out) {
-    // The cluster's finite points are copied into remaining_ (contiguous, in cluster order):
-    // every pass below reads and partitions them there instead of gathering through indices.
+    gather(points, cluster, [](const Point3d& p) { return p; });
+    return extract_gathered(rng, out);
+  }
+
+  /// The same for points given in another frame: the cluster's points are `pose` * points[i]
+  /// (e.g. a sensor frame's points and the sensor's pose in the world); the planes come out in
+  /// pose's target frame.
+  template <class Engine>
+  std::size_t extract(std::span<const Point3d> points, std::span<const std::uint32_t> cluster,
+                      const Transform3d& pose, Engine& rng, std::vector<ExtractedPlane>& out) {
+    const Eigen::Matrix3d rotation = pose.linear();
+    const Point3d translation = pose.translation();
+    gather(points, cluster,
+           [&](const Point3d& p) -> Point3d { return rotation * p + translation; });
+    return extract_gathered(rng, out);
+  }
+
+  /// Extracts the planes of every point (one cluster holding all of them).
+  template <class Engine>
+  std::size_t extract(std::span<const Point3d> points, Engine& rng,
+                      std::vector<ExtractedPlane>& out) {
+    all_.resize(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i)
+      all_[i] = static_cast<std::uint32_t>(i);
+    return extract(points, std::span<const std::uint32_t>(all_), rng, out);
+  }
+
+ private:
+  /// Copies the cluster's finite points, transformed by `map`, into remaining_ (contiguous, in
+  /// cluster order): every pass below reads and partitions them there instead of gathering
+  /// through indices.
+  template <class Map>
+  void gather(std::span<const Point3d> points, std::span<const std::uint32_t> cluster, Map map) {
     remaining_.resize(cluster.size());
     std::size_t kept = 0;
     for (const std::uint32_t i : cluster) {
@@ -133,11 +164,16 @@ class PlaneExtractor {
         detail::throw_invalid_argument(
             "PlaneExtractor::extract", "cluster index", i,
             "must be < points.size() = " + std::to_string(points.size()));
-      const Point3d& p = points[i];
+      const Point3d p = map(points[i]);
       remaining_[kept] = p;
       kept += std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()) ? 1 : 0;
     }
     remaining_.resize(kept);
+  }
+
+  /// Iterative RANSAC on remaining_ (see extract).
+  template <class Engine>
+  std::size_t extract_gathered(Engine& rng, std::vector<ExtractedPlane>& out) {
     const std::size_t min_remaining = std::max<std::size_t>(
         3, params_.min_remaining != 0 ? params_.min_remaining : params_.min_inliers);
     const std::size_t before = out.size();
@@ -190,17 +226,6 @@ class PlaneExtractor {
     return out.size() - before;
   }
 
-  /// Extracts the planes of every point (one cluster holding all of them).
-  template <class Engine>
-  std::size_t extract(std::span<const Point3d> points, Engine& rng,
-                      std::vector<ExtractedPlane>& out) {
-    all_.resize(points.size());
-    for (std::size_t i = 0; i < points.size(); ++i)
-      all_[i] = static_cast<std::uint32_t>(i);
-    return extract(points, std::span<const std::uint32_t>(all_), rng, out);
-  }
-
- private:
   [[nodiscard]] bool admissible(const Point3d& normal) const {
     return !params_.axis ||
            std::abs(normal.dot(*params_.axis)) >= std::cos(params_.max_axis_angle) - 1e-12;

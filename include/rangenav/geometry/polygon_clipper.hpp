@@ -143,6 +143,8 @@ template <class Scalar>
   namespace bg = boost::geometry;
   using Box = bg::model::box<BoostPoint2<Scalar>>;
   if (bg::disjoint(bg::return_envelope<Box>(a), bg::return_envelope<Box>(b))) return false;
+  // A polygon without area overlaps nothing (and has no interior for the vertex test).
+  if (!(bg::area(a) > Scalar(0) && bg::area(b) > Scalar(0))) return false;
   if (sampled_vertex_within(b.outer(), a) || sampled_vertex_within(a.outer(), b)) return true;
   if (!bg::intersects(a, b)) return false;
   bg::model::multi_polygon<BoostPolygon2<Scalar>> common;

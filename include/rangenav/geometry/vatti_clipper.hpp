@@ -18,6 +18,7 @@
 #error "rangenav/geometry/vatti_clipper.hpp needs Clipper (Debian: libpolyclipping-dev)"
 #endif
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <string>
@@ -47,11 +48,24 @@ class VattiClipper {
 
   [[nodiscard]] double scale() const { return scale_; }
 
-  /// True when the intersection of a and b has a positive area on the integer grid.
+  /// True when the intersection of a and b has a positive area on the integer grid. Two cheap
+  /// answers come before Vatti's intersection: bounding boxes that do not overlap with a positive
+  /// area (no), and a vertex of one polygon strictly inside the other (ClipperLib::PointInPolygon
+  /// on up to 8 vertices of each outer ring, inside the outer ring and in no hole: yes, every
+  /// neighbourhood of a boundary point of b holds interior points of b).
   template <class Scalar>
   [[nodiscard]] bool intersects(const Polygon2<Scalar>& a, const Polygon2<Scalar>& b) const {
+    constexpr const char* where = "VattiClipper::intersects";
+    const ClipperLib::Paths pa = to_paths(where, "a", a);
+    const ClipperLib::Paths pb = to_paths(where, "b", b);
+    // A polygon without area on the grid overlaps nothing (and has no interior to hold a vertex).
+    if (ClipperLib::Area(pa.front()) == 0 || ClipperLib::Area(pb.front()) == 0) return false;
+    const Box ba = bounds(pa.front()), bb = bounds(pb.front());
+    if (ba.right <= bb.left || bb.right <= ba.left || ba.top <= bb.bottom || bb.top <= ba.bottom)
+      return false;
+    if (sampled_vertex_inside(pb.front(), pa) || sampled_vertex_inside(pa.front(), pb)) return true;
     ClipperLib::Paths result;
-    execute("VattiClipper::intersects", ClipperLib::ctIntersection, a, b, result);
+    execute(where, ClipperLib::ctIntersection, pa, pb, result);
     double area = 0;
     for (const auto& path : result)
       area += ClipperLib::Area(path);
@@ -64,8 +78,9 @@ class VattiClipper {
   template <class Scalar>
   [[nodiscard]] std::vector<Polygon2<Scalar>> union_of(const Polygon2<Scalar>& a,
                                                        const Polygon2<Scalar>& b) const {
+    constexpr const char* where = "VattiClipper::union_of";
     ClipperLib::PolyTree tree;
-    execute("VattiClipper::union_of", ClipperLib::ctUnion, a, b, tree);
+    execute(where, ClipperLib::ctUnion, to_paths(where, "a", a), to_paths(where, "b", b), tree);
     std::vector<Polygon2<Scalar>> out;
     collect(tree, out);
     return out;
@@ -93,22 +108,54 @@ class VattiClipper {
     return path;
   }
 
+  // The outer ring first, then the holes, on the integer grid; validates the polygon.
   template <class Scalar>
-  void add(const char* where, ClipperLib::Clipper& clipper, const Polygon2<Scalar>& polygon,
-           ClipperLib::PolyType type) const {
-    clipper.AddPath(to_path(where, polygon.outer), type, true);
+  ClipperLib::Paths to_paths(const char* where, const char* name,
+                             const Polygon2<Scalar>& polygon) const {
+    detail::require_valid_polygon(where, name, polygon);
+    ClipperLib::Paths paths;
+    paths.reserve(1 + polygon.holes.size());
+    paths.push_back(to_path(where, polygon.outer));
     for (const auto& h : polygon.holes)
-      clipper.AddPath(to_path(where, h), type, true);
+      paths.push_back(to_path(where, h));
+    return paths;
   }
 
-  template <class Scalar, class Solution>
-  void execute(const char* where, ClipperLib::ClipType type, const Polygon2<Scalar>& a,
-               const Polygon2<Scalar>& b, Solution& solution) const {
-    detail::require_valid_polygon(where, "a", a);
-    detail::require_valid_polygon(where, "b", b);
+  struct Box {
+    ClipperLib::cInt left, bottom, right, top;
+  };
+  static Box bounds(const ClipperLib::Path& ring) {
+    Box box{ring.front().X, ring.front().Y, ring.front().X, ring.front().Y};
+    for (const auto& p : ring) {
+      box.left = std::min(box.left, p.X);
+      box.right = std::max(box.right, p.X);
+      box.bottom = std::min(box.bottom, p.Y);
+      box.top = std::max(box.top, p.Y);
+    }
+    return box;
+  }
+
+  // Whether one of up to 8 vertices spread over `ring` lies strictly inside `polygon` (inside its
+  // outer ring, neither on a boundary nor in or on a hole).
+  static bool sampled_vertex_inside(const ClipperLib::Path& ring,
+                                    const ClipperLib::Paths& polygon) {
+    const std::size_t stride = std::max<std::size_t>(1, ring.size() / 8);
+    for (std::size_t i = 0; i < ring.size(); i += stride) {
+      if (ClipperLib::PointInPolygon(ring[i], polygon.front()) != 1) continue;
+      bool in_hole = false;
+      for (std::size_t h = 1; h < polygon.size() && !in_hole; ++h)
+        in_hole = ClipperLib::PointInPolygon(ring[i], polygon[h]) != 0;
+      if (!in_hole) return true;
+    }
+    return false;
+  }
+
+  template <class Solution>
+  static void execute(const char* where, ClipperLib::ClipType type, const ClipperLib::Paths& a,
+                      const ClipperLib::Paths& b, Solution& solution) {
     ClipperLib::Clipper clipper;
-    add(where, clipper, a, ClipperLib::ptSubject);
-    add(where, clipper, b, ClipperLib::ptClip);
+    clipper.AddPaths(a, ClipperLib::ptSubject, true);
+    clipper.AddPaths(b, ClipperLib::ptClip, true);
     if (!clipper.Execute(type, solution, ClipperLib::pftEvenOdd, ClipperLib::pftEvenOdd))
       detail::throw_invalid(where, "Clipper failed on the input");
   }

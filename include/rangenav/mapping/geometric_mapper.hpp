@@ -236,6 +236,24 @@ class GeometricMapper {
     }
     const bool organized = params_.organized_clustering && params_.extraction_leaf == 0 &&
                            height > 1 && width * height == n;
+    extractor_.set_viewpoint(Point3d(report.pose.translation()));
+    if constexpr (requires { std::span<const Point3d>(cloud.points); }) {
+      if (organized) {
+        // Clustered in the sensor frame (distances do not change under the rigid pose), and
+        // each cluster's points transformed as the extractor copies them: the frame is not
+        // copied into the world as a whole.
+        const std::span<const Point3d> points(cloud.points);
+        std::size_t finite = 0;
+        const auto clusters =
+            organized_euclidean_clusters(points, width, height, params_.clustering, &finite);
+        report.extraction_points = finite;
+        if (finite < 3) return;
+        report.clusters = clusters.size();
+        for (const auto& cluster : clusters)
+          extractor_.extract(points, cluster, report.pose, rng, report.planes);
+        return;
+      }
+    }
     // The frame in the world: x_w = R x + t. A non-finite coordinate makes every coordinate of
     // R x + t non-finite (inf * 0 is NaN), so the organised frame is transformed as it is, NaN
     // pixels included, and counted by one coordinate.
@@ -258,7 +276,6 @@ class GeometricMapper {
       }
       finite = world_.size();
     }
-    extractor_.set_viewpoint(Point3d(report.pose.translation()));
     if (organized) {
       report.extraction_points = finite;
       if (finite < 3) return;
