@@ -348,6 +348,42 @@ TEST_CASE("SparsePointMap keeps the normals of its walls", "[mapping]") {
                     "rangenav: SparsePointMap: argument 'normal_neighbors' = 1 must be >= 2");
 }
 
+TEST_CASE("SparsePointMap's insertion hints store the points Eq. (5) stores", "[mapping]") {
+  // Hints (a stored point that may be near each new point, as the ICP's pairs give) only skip
+  // searches: right, wrong, out-of-range and missing hints store what no hints store.
+  std::mt19937 rng(8);
+  const auto room = test::room_3d(rng, 2000);
+  const std::vector<Eigen::Vector3d> first(room.begin(), room.begin() + room.size() / 2);
+  const std::vector<Eigen::Vector3d> second(room.begin() + room.size() / 2, room.end());
+  SparsePointMapParams<double> params;
+  params.epsilon_d = 0.1;
+  SparsePointMap<3> plain(params), hinted(params);
+  plain.insert(first);
+  hinted.insert(first);
+  const auto pose = test::make_transform3(0.02, -0.01, 0.0, 0.0, 0.0, 0.01);
+  const BruteForceSearch<3, double> brute(hinted.points());
+  std::vector<std::uint32_t> hints;
+  std::uniform_int_distribution<std::uint32_t> any(0, static_cast<std::uint32_t>(2 * first.size()));
+  std::size_t right = 0;
+  for (std::size_t i = 0; i < second.size(); ++i) {
+    if (i % 4 == 0) {
+      hints.push_back(SparsePointMap<3>::no_hint);
+    } else if (i % 4 == 1) {
+      hints.push_back(any(rng));  // mostly far, some beyond the map
+    } else {
+      const auto nb = brute.nearest(pose * second[i]);
+      hints.push_back(nb->index);
+      right += nb->distance_sq < 0.01 ? 1 : 0;
+    }
+  }
+  CHECK(right > 100);
+  const auto a = plain.insert(second, pose);
+  const auto b = hinted.insert(second, pose, hints);
+  CHECK(a.offered == b.offered);
+  CHECK(a.stored == b.stored);
+  CHECK(plain.points() == hinted.points());
+}
+
 TEST_CASE("SparsePointMap refreshes exactly the normals its insertions change", "[mapping]") {
   // Inserted in batches, each point's normal must be the PCA normal of its k nearest map points
   // within normal_radius in the final map (brute force), though only the points whose k nearest

@@ -24,6 +24,7 @@
 #include <cmath>
 #include <concepts>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -166,8 +167,16 @@ class IncrementalMapper {
     }
     // What a key frame adds to the map: the scan, or its voxel filter (insert_downsampled).
     const auto insert_into_map = [&](const transform_type& pose) {
-      if (params.insert_downsampled && params.voxel_size > Scalar(0))
-        return map_.insert(finite_, pose);
+      if (params.insert_downsampled && params.voxel_size > Scalar(0)) {
+        // The map ICP's last pairs name, for most scan points, a map point within a few cm:
+        // hints for Eq. (5)'s test (the map has not changed since; same points stored).
+        hints_.assign(finite_.size(), map_type::no_hint);
+        if constexpr (requires { icp.correspondences(); })
+          if (update.icp)
+            for (const auto& c : icp.correspondences())
+              hints_[c.data_index] = c.model_index;
+        return map_.insert(finite_, pose, hints_);
+      }
       return map_.insert(scan, pose);
     };
 
@@ -256,12 +265,14 @@ class IncrementalMapper {
     return p;
   }
 
-  SparsePointMap<D, Scalar, Index> map_;
+  using map_type = SparsePointMap<D, Scalar, Index>;
+  map_type map_;
   KeyFrameSelector<D, Scalar> key_frames_;
   transform_type pose_ = transform_type::Identity();
   std::optional<transform_type> last_odometry_;
   std::size_t scans_ = 0;
   std::vector<point_type> finite_;
+  std::vector<std::uint32_t> hints_;           ///< map point near each of finite_ (the ICP's)
   std::vector<point_type> previous_;           ///< the previous scan in the map frame
   std::optional<transform_type> last_motion_;  ///< pose change of the last scan
 };

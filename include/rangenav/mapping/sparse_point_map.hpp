@@ -25,6 +25,8 @@
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
+#include <span>
 #include <string_view>
 #include <type_traits>
 #include <unordered_map>
@@ -91,6 +93,19 @@ class SparsePointMap {
   template <PointCloudOf<D> C>
   SparseInsertStats insert(const C& cloud,
                            const transform_type& pose = transform_type::Identity()) {
+    return insert(cloud, pose, {});
+  }
+
+  /// No hint for a point (see the three-argument insert()).
+  static constexpr std::uint32_t no_hint = std::numeric_limits<std::uint32_t>::max();
+
+  /// insert(cloud, pose) with a hint per cloud point: the index of a stored point that may lie
+  /// within eps_D of it (e.g. its last ICP correspondence), or no_hint; an empty span gives no
+  /// hints. A hinted point within eps_D proves Eq. (5)'s test without a search; the stored
+  /// points are those of insert(cloud, pose).
+  template <PointCloudOf<D> C>
+  SparseInsertStats insert(const C& cloud, const transform_type& pose,
+                           std::span<const std::uint32_t> near_hint) {
     if (!is_rigid(pose, Scalar(std::is_same_v<Scalar, float> ? 1e-3 : 1e-6)))
       detail::throw_invalid("SparsePointMap::insert",
                             "argument 'pose' is not a finite rigid transform");
@@ -102,6 +117,9 @@ class SparsePointMap {
       const point_type p = pose * traits::point(cloud, i).template cast<Scalar>();
       if (!p.allFinite()) continue;
       ++stats.offered;
+      if (i < near_hint.size() && near_hint[i] < tree_.size() &&
+          (tree_.point(near_hint[i]) - p).squaredNorm() < eps_sq)
+        continue;
       if (!tree_.nearest(p, eps_sq)) candidates_.push_back(p);
     }
     if (params_.deduplicate_within_scan) thin_candidates(eps_sq);
@@ -142,10 +160,14 @@ class SparsePointMap {
   // Normals of the new points [first, size) and of every stored point whose k nearest
   // neighbours changed. A stored point's k-NN (within normal_radius) changes exactly when a
   // new point comes closer than its `reach` (its k-th neighbour's distance, or normal_radius
-  // while it has fewer than k), so only those are recomputed. The k-NN of a new point are the
-  // k nearest of its normal_radius neighbourhood, which the dirtiness test queries anyway.
+  // while it has fewer than k), so only those are recomputed. They are found by a radius query
+  // of normal_radius / 2 around each new point, plus, for the few stored points whose reach
+  // exceeds that ("wide" points, kept in their own index), a normal_radius query of that
+  // index. The k-NN of a new point are the k nearest of its half-radius neighbourhood when it
+  // holds k points, else a k-NN query's.
   void update_normals(std::size_t first) {
     const Scalar radius_sq = params_.normal_radius * params_.normal_radius;
+    const Scalar near_sq = radius_sq / 4;
     const std::size_t size = tree_.size();
     normals_.resize(size, point_type::Zero());
     reach_sq_.resize(size, radius_sq);
@@ -153,18 +175,31 @@ class SparsePointMap {
     const auto closer = [](const Neighbor<Scalar>& a, const Neighbor<Scalar>& b) {
       return a.distance_sq < b.distance_sq || (a.distance_sq == b.distance_sq && a.index < b.index);
     };
+    const auto mark = [&](std::uint32_t j, Scalar distance_sq) {
+      if (j < first && distance_sq < reach_sq_[j]) dirty_[j] = 1;
+    };
     for (std::size_t i = first; i < size; ++i) {
+      const point_type& q = tree_.point(i);
+      if (!wide_.empty()) {
+        wide_.radius(q, radius_sq, neighbors_, false);
+        for (const auto& nb : neighbors_)
+          mark(wide_index_[nb.index], nb.distance_sq);
+      }
       // Only which points are near matters here, not their order.
-      if constexpr (requires { tree_.radius(tree_.point(i), radius_sq, neighbors_, false); })
-        tree_.radius(tree_.point(i), radius_sq, neighbors_, false);
+      if constexpr (requires { tree_.radius(q, near_sq, neighbors_, false); })
+        tree_.radius(q, near_sq, neighbors_, false);
       else
-        tree_.radius(tree_.point(i), radius_sq, neighbors_);
+        tree_.radius(q, near_sq, neighbors_);
       for (const auto& nb : neighbors_)
-        if (nb.index < first && nb.distance_sq < reach_sq_[nb.index]) dirty_[nb.index] = 1;
-      const std::size_t k = std::min(params_.normal_neighbors, neighbors_.size());
-      std::partial_sort(neighbors_.begin(), neighbors_.begin() + static_cast<std::ptrdiff_t>(k),
-                        neighbors_.end(), closer);
-      neighbors_.resize(k);
+        mark(nb.index, nb.distance_sq);
+      const std::size_t k = params_.normal_neighbors;
+      if (neighbors_.size() >= k) {
+        std::partial_sort(neighbors_.begin(), neighbors_.begin() + static_cast<std::ptrdiff_t>(k),
+                          neighbors_.end(), closer);
+        neighbors_.resize(k);
+      } else {
+        tree_.knn(q, k, neighbors_, radius_sq);
+      }
       normals_[i] = normal_of_neighbors(i, radius_sq);
     }
     for (std::size_t i = 0; i < first; ++i)
@@ -172,6 +207,14 @@ class SparsePointMap {
         tree_.knn(tree_.point(i), params_.normal_neighbors, neighbors_, radius_sq);
         normals_[i] = normal_of_neighbors(i, radius_sq);
       }
+    // A reach only shrinks as points are added: the wide points are among the new ones.
+    wide_batch_.clear();
+    for (std::size_t i = first; i < size; ++i)
+      if (reach_sq_[i] >= near_sq) {
+        wide_batch_.push_back(tree_.point(i));
+        wide_index_.push_back(static_cast<std::uint32_t>(i));
+      }
+    if (!wide_batch_.empty()) wide_.insert(wide_batch_);
   }
 
   // The PCA normal of point i from its k nearest neighbours in neighbors_ (ascending); records
@@ -251,7 +294,10 @@ class SparsePointMap {
   std::unordered_map<std::uint64_t, std::uint32_t> grid_;
   std::vector<std::uint32_t> next_;
   std::vector<point_type> normals_;
-  std::vector<Scalar> reach_sq_;  ///< per point: squared distance of its k-th normal neighbour
+  std::vector<Scalar> reach_sq_;   ///< per point: squared distance of its k-th normal neighbour
+  GrowingKdTree<D, Scalar> wide_;  ///< points whose reach exceeds normal_radius / 2
+  std::vector<std::uint32_t> wide_index_;  ///< their indices in the map
+  std::vector<point_type> wide_batch_;
   std::vector<unsigned char> dirty_;
   std::vector<Neighbor<Scalar>> neighbors_;
 };
