@@ -394,6 +394,38 @@ TEST_CASE("concave_hull thinning is invariant under shifts by whole cells", "[ge
   }
 }
 
+TEST_CASE("concave_hull thinning of a sparse wide input keeps every square patch", "[geometry]") {
+  // Five square lattice patches of 7..11 points a side (4 mm pitch) spread over 2 m: the box is
+  // much wider than the input is large, so the thinning cells are found point by point (not by
+  // the coordinate tables of dense inputs). Ground truth: each patch's alpha shape (alpha 4 cm)
+  // is its square, area ((m - 1) 4 mm)^2, and its points form one piece; also after shifts by
+  // whole and fractional cells onto negative coordinates.
+  const double res = 0.001, alpha = 0.04;
+  for (const double shift_x : {0.0, -1.3, -0.0207, 0.5}) {
+    const double shift_y = -shift_x / 2;
+    std::vector<Point2d> points;
+    std::vector<int> patch_of;
+    for (int p = 0; p < 5; ++p) {
+      const int m = 7 + p;
+      for (int i = 0; i < m; ++i)
+        for (int j = 0; j < m; ++j) {
+          points.emplace_back(shift_x + 0.5 * p + 0.004 * i, shift_y + 0.004 * j);
+          patch_of.push_back(p);
+        }
+    }
+    std::vector<std::int32_t> piece;
+    const auto hull = ConcaveHull({alpha, res, 0.0, 0.5}).compute(points, &piece);
+    REQUIRE(hull.size() == 5);
+    for (std::size_t k = 0; k < hull.size(); ++k) {  // largest first: the 11-point patch
+      const double side = 0.004 * double(11 - 1 - k);
+      CHECK(hull[k].holes.empty());
+      CHECK(hull[k].area() == Approx(side * side).epsilon(1e-9));
+    }
+    for (std::size_t i = 0; i < points.size(); ++i)
+      CHECK(piece[i] == 4 - patch_of[i]);
+  }
+}
+
 TEST_CASE("concave_hull sparse interior gives the same alpha shape", "[geometry]") {
   // Deep interior cells keep a site only at even cell coordinates; the file comment proves that
   // the alpha shape does not change. Random unions of discs and rectangles with holes, sampled

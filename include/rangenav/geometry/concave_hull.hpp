@@ -209,9 +209,38 @@ class ConcaveHull {
     cell_slot_.assign(static_cast<std::size_t>(w * h), none);  // first point, then slot
     cell_index_.resize(n);
     occupied_.clear();  // the occupied cells in the order of their first points
+    // The cell of every point. Where the box is not much wider than the input is large, by
+    // tables of the cell column and row offset of every grid coordinate in it, filled by
+    // walking the coordinates (a cell starts every k steps), which costs less than cell_of
+    // twice per point; otherwise cell_of per point. Both give cell_of's cells.
+    const auto span_x = static_cast<std::size_t>(std::int64_t(gx1) - gx0 + 1);
+    const auto span_y = static_cast<std::size_t>(std::int64_t(gy1) - gy0 + 1);
+    const bool by_table = span_x + span_y <= 4 * n;
+    if (by_table) {
+      const auto fill = [&](std::vector<std::uint32_t>& table, std::int32_t from, std::size_t span,
+                            std::int64_t first, std::int64_t stride) {
+        table.resize(span);
+        std::int64_t cell = first;  // cell_of(from)
+        std::int64_t next = (cell + 1) * k;
+        std::int64_t value = 1 * stride;
+        for (std::size_t i = 0; i < span; ++i) {
+          if (std::int64_t(from) + std::int64_t(i) == next) {
+            ++cell;
+            next += k;
+            value += stride;
+          }
+          table[i] = static_cast<std::uint32_t>(value);
+        }
+      };
+      fill(column_of_, gx0, span_x, x0, 1);
+      fill(row_of_, gy0, span_y, y0, w);
+    }
     for (std::size_t i = 0; i < n; ++i) {
-      const auto c = static_cast<std::size_t>((cell_of(snapped_[i][1]) - y0 + 1) * w +
-                                              (cell_of(snapped_[i][0]) - x0 + 1));
+      const auto c = by_table
+                         ? std::size_t(row_of_[static_cast<std::size_t>(snapped_[i][1] - gy0)]) +
+                               column_of_[static_cast<std::size_t>(snapped_[i][0] - gx0)]
+                         : static_cast<std::size_t>((cell_of(snapped_[i][1]) - y0 + 1) * w +
+                                                    (cell_of(snapped_[i][0]) - x0 + 1));
       cell_index_[i] = static_cast<std::uint32_t>(c);
       if (cell_slot_[c] == none) {
         cell_slot_[c] = static_cast<std::uint32_t>(i);
@@ -544,6 +573,8 @@ class ConcaveHull {
   std::vector<std::uint8_t> run_;          // sparsen_interior's row runs
   std::vector<std::uint32_t> extreme_;     // per boundary cell: 8 extreme points
   std::vector<std::uint32_t> cell_index_;  // per input point: its thinning cell
+  std::vector<std::uint32_t> column_of_;   // per grid x in the box: its cell column + 1
+  std::vector<std::uint32_t> row_of_;      // per grid y in the box: (its cell row + 1) * width
   std::vector<std::uint32_t> occupied_;    // the occupied thinning cells
   std::vector<std::pair<cell_type, std::uint32_t>> keyed_;  // site grid point, input index
   std::vector<cell_type> sites_;

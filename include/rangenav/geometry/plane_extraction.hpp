@@ -194,9 +194,9 @@ class PlaneExtractor {
       const double cells = 2.0 / params_.hull.alpha;  // round 1's cells of alpha / 2
       std::size_t surface = split_inliers(plane, PlaneFrame<double>::of(plane), cells);
       if (surface < params_.min_inliers) break;
-      Moments moments;
-      surface = largest_cell_piece(surface, moments);
+      surface = largest_cell_piece(surface);
       if (surface < params_.min_inliers) break;
+      Moments moments = Moments::of(remaining_.data(), surface);
       if (const auto refit = fit_least_squares(moments, plane); refit && admissible(refit->normal))
         plane = *refit;
       const PlaneFrame<double> hull_frame = PlaneFrame<double>::of(plane);
@@ -204,16 +204,15 @@ class PlaneExtractor {
       std::vector<Polygon2<double>> pieces = hull_.compute(projected_, &piece_);
       surface = 0;  // stable partition: the largest piece's points first
       others_.clear();
-      moments = {};
       for (std::size_t k = 0; k < count; ++k)
         if (piece_[k] == 0) {
-          moments.add(remaining_[k]);
           remaining_[surface++] = remaining_[k];
         } else {
           others_.push_back(remaining_[k]);
         }
       std::copy(others_.begin(), others_.end(),
                 remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
+      moments = Moments::of(remaining_.data(), surface);
       if (pieces.empty() || surface < params_.min_inliers) break;
       if (const auto refit = fit_least_squares(moments, plane); refit && admissible(refit->normal))
         plane = *refit;
@@ -276,21 +275,40 @@ class PlaneExtractor {
   }
 
   /// Sums of q = p - p0 and of q q^T over points p, shifted by the first point p0 for
-  /// precision; accumulated while the points are partitioned (no pass of their own).
+  /// precision.
   struct Moments {
     Point3d p0 = Point3d::Zero(), sum = Point3d::Zero();
     double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
     std::size_t count = 0;
-    void add(const Point3d& p) {
-      if (count++ == 0) p0 = p;
-      const Point3d q = p - p0;
-      sum += q;
-      xx += q.x() * q.x();
-      xy += q.x() * q.y();
-      xz += q.x() * q.z();
-      yy += q.y() * q.y();
-      yz += q.y() * q.z();
-      zz += q.z() * q.z();
+    /// The moments of p[0 .. count), in one tight pass over the contiguous points (cheaper than
+    /// accumulating them point by point while partitioning).
+    static Moments of(const Point3d* p, std::size_t count) {
+      Moments m;
+      if (count == 0) return m;
+      m.p0 = p[0];
+      m.count = count;
+      const double x0 = m.p0.x(), y0 = m.p0.y(), z0 = m.p0.z();
+      double sx = 0, sy = 0, sz = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
+      for (std::size_t k = 0; k < count; ++k) {
+        const double qx = p[k].x() - x0, qy = p[k].y() - y0, qz = p[k].z() - z0;
+        sx += qx;
+        sy += qy;
+        sz += qz;
+        xx += qx * qx;
+        xy += qx * qy;
+        xz += qx * qz;
+        yy += qy * qy;
+        yz += qy * qz;
+        zz += qz * qz;
+      }
+      m.sum = Point3d(sx, sy, sz);
+      m.xx = xx;
+      m.xy = xy;
+      m.xz = xz;
+      m.yy = yy;
+      m.yz = yz;
+      m.zz = zz;
+      return m;
     }
   };
 
@@ -315,7 +333,7 @@ class PlaneExtractor {
   /// Round 1's piece: moves the points of the largest 8-connected group of occupied cells of
   /// alpha / 2, among the `count` inliers at the front of remaining_ (projected_: their plane
   /// coordinates in cells, from split_inliers), to the front (stably); returns their count.
-  std::size_t largest_cell_piece(std::size_t count, Moments& moments) {
+  std::size_t largest_cell_piece(std::size_t count) {
     if (count == 0) return 0;
     double x0 = lo_.x(), y0 = lo_.y(), x1 = hi_.x(), y1 = hi_.y();
     // Cells with a margin of one on each side; a plane too large for a dense grid of a few
@@ -323,11 +341,7 @@ class PlaneExtractor {
     x0 = std::floor(x0) - 1;
     y0 = std::floor(y0) - 1;
     const double wd = std::floor(x1) - x0 + 2, hd = std::floor(y1) - y0 + 2;
-    if (!(wd * hd <= 4.0 * double(count) + 4096)) {
-      for (std::size_t k = 0; k < count; ++k)
-        moments.add(remaining_[k]);
-      return count;
-    }
+    if (!(wd * hd <= 4.0 * double(count) + 4096)) return count;
     const auto w = static_cast<std::size_t>(wd), h = static_cast<std::size_t>(hd);
     constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
     cells_.assign(w * h, none);    // union-find parent per occupied cell
@@ -373,7 +387,6 @@ class PlaneExtractor {
     others_.clear();
     for (std::size_t k = 0; k < count; ++k)
       if (cells_[static_cast<std::size_t>(piece_[k])] == best) {
-        moments.add(remaining_[k]);
         remaining_[surface++] = remaining_[k];
       } else
         others_.push_back(remaining_[k]);
@@ -398,22 +411,38 @@ class PlaneExtractor {
     Point3d* const out = others_.data();
     Point2d* const proj = projected_.data();
     std::size_t count = 0, other = 0;
-    Point2d lo = Point2d::Constant(std::numeric_limits<double>::max()), hi = -lo;
+    // The loop in scalars (Eigen's small fixed-size expressions here spilled to the stack and
+    // the inlier-only box became a branch): the same operations in the same order as
+    // plane.signed_distance(p) and (R.topRows<2>() * p + offset) * scale, so the same bits.
+    const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
+    const double d = plane.d;
     // frame.to_plane's first two rows, inlined: x_plane = R (x - o), Eq. (10).
     const Eigen::Matrix<double, 2, 3> rows = frame.world_to_plane.linear().topRows<2>();
-    const Point2d offset = frame.world_to_plane.translation().head<2>();
+    const double r00 = rows(0, 0), r01 = rows(0, 1), r02 = rows(0, 2);
+    const double r10 = rows(1, 0), r11 = rows(1, 1), r12 = rows(1, 2);
+    const double ox = frame.world_to_plane.translation().x();
+    const double oy = frame.world_to_plane.translation().y();
     for (std::size_t k = 0; k < n; ++k) {
-      const Point3d p = in[k];
-      const bool inlier = std::abs(plane.signed_distance(p)) < thr;  // |delta| of Eq. (2)
-      const Point2d q = (rows * p + offset) * scale;
-      in[count] = p;
-      out[other] = p;
-      proj[count] = q;
-      const Point2d box = inlier ? q : lo;  // keeps the box of the inliers only
-      lo = lo.cwiseMin(box);
-      hi = hi.cwiseMax(inlier ? q : hi);
+      const double x = in[k].x(), y = in[k].y(), z = in[k].z();
+      const double delta = nx * x + ny * y + nz * z + d;  // Eq. (2)
+      const bool inlier = std::abs(delta) < thr;
+      const double qx = (r00 * x + r01 * y + r02 * z + ox) * scale;
+      const double qy = (r10 * x + r11 * y + r12 * z + oy) * scale;
+      double* const a = in[count].data();
+      double* const b = out[other].data();
+      a[0] = b[0] = x;
+      a[1] = b[1] = y;
+      a[2] = b[2] = z;
+      proj[count] = Point2d(qx, qy);
       count += inlier ? 1 : 0;
       other += inlier ? 0 : 1;
+    }
+    // The box of the inliers, in a pass of its own over them (in the loop above it became a
+    // branch on the inlier test).
+    Point2d lo = Point2d::Constant(std::numeric_limits<double>::max()), hi = -lo;
+    for (std::size_t k = 0; k < count; ++k) {
+      lo = lo.cwiseMin(proj[k]);
+      hi = hi.cwiseMax(proj[k]);
     }
     std::copy(out, out + other, in + count);
     projected_.resize(count);
