@@ -32,19 +32,20 @@
 // 5 cm). Every input point keeps its piece: a thinned point belongs to a site of its cell.
 //
 // Sparse interior (ConcaveHullParams::sparse_interior, with thinning; for speed, the Voronoi
-// diagram costs about 7,500 instructions per site): a deep cell, one whose 7 x 7 block of cells
+// diagram costs about 7,500 instructions per site): a deep cell, one whose 5 x 5 block of cells
 // is all occupied, keeps its centre site only when both its cell coordinates are even; the
-// alpha shape is exactly the same. Proof: the even cells around a removed cell are interior and
-// keep their centres, so every point of the occupied cells is still within c sqrt 2 of a site
-// (the worst place is the centre of a cell with both coordinates odd); a Delaunay face whose
-// circumcentre lies there has circumradius <= c sqrt 2 < alpha and is kept. A face that is not
-// kept (radius R > alpha >= 2 c, empty open disc) has its centre outside the occupied cells; if
-// its disc held a removed centre s, it would hold a disc of radius 1.5 c (< R) centred within
-// 1.5 c of s (slide a disc of radius 1.5 c from s towards the centre), which lies inside the 7 x 7
-// block around s and contains a remaining site (within c sqrt 2 < 1.5 c of its centre): not empty.
-// So the faces that are not kept are the same with and without the removed sites, the removed
-// sites are not on the convex hull, and the kept faces fill the same region: same boundary edges,
-// same rings, same pieces (tested against sparse_interior = false).
+// alpha shape is exactly the same. Proof: the even cells next to a removed cell are interior
+// (their 3 x 3 blocks are occupied) and keep their centres, so every point of an occupied cell is
+// still within c sqrt 2 of a site (the worst place is the centre of a cell with both coordinates
+// odd; a boundary cell holds a site of its own); a Delaunay face whose circumcentre lies there has
+// circumradius <= c sqrt 2 < alpha and is kept. A face that is not kept (radius R > alpha >= 2 c,
+// empty open disc D) would, if D held a removed centre s, also hold a disc E of radius
+// r = c sqrt 2 + epsilon (< R) centred within r of s (slide E from s towards D's centre); E's
+// centre lies in s's 3 x 3 block, an occupied cell, so a site is closer to it than r: inside E
+// and D, which is empty. So the faces that are not kept are the same with and without the
+// removed sites, the removed sites are not on the convex hull, and the kept faces fill the same
+// region: same boundary edges, same rings, same pieces (tested against sparse_interior = false;
+// with a 3 x 3 block, whose even neighbours may be boundary cells, the test fails).
 
 #include <boost/geometry/algorithms/within.hpp>
 #include <boost/geometry/geometries/point_xy.hpp>
@@ -82,7 +83,7 @@ struct ConcaveHullParams {
   /// Thinning cell edge as a fraction of alpha, in [0, 0.5]; 0 = every point is a site (see the
   /// file comment). Cells smaller than 2 grid steps are not thinned.
   double thinning = 0.0;
-  /// With thinning: deep interior cells (their 7 x 7 block of cells all occupied) keep a site
+  /// With thinning: deep interior cells (their 5 x 5 block of cells all occupied) keep a site
   /// only where both cell coordinates are even, a quarter of the sites there; the alpha shape is
   /// the same (see the file comment). false: every interior cell keeps its site.
   bool sparse_interior = true;
@@ -148,9 +149,20 @@ class ConcaveHull {
         const std::uint32_t root = find(static_cast<std::uint32_t>(s));
         piece_of_site_[s] = root < piece_of_root_.size() ? piece_of_root_[root] : -1;
       }
+      // A point that is no site (thinned away) takes the site of its cell's representative:
+      // an interior cell's first point (or, sparse interior, its even neighbour's), a boundary
+      // cell's first extreme.
+      constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
       piece_of_point->resize(n);
-      for (std::size_t i = 0; i < n; ++i)
-        (*piece_of_point)[i] = piece_of_site_[site_of_point_[representative_[i]]];
+      for (std::size_t i = 0; i < n; ++i) {
+        std::uint32_t s = site_of_point_[i];
+        if (s == none) {
+          const std::uint32_t slot = cell_slot_[cell_index_[i]];
+          s = site_of_point_[slot <= boundary_tag_ ? slot
+                                                   : extreme_[(none - 1 - slot) * directions]];
+        }
+        (*piece_of_point)[i] = piece_of_site_[s];
+      }
     }
     return result;
   }
@@ -164,13 +176,10 @@ class ConcaveHull {
     bool operator==(const DirectedEdge&) const = default;
   };
 
-  /// Fills keyed_ with the sites to triangulate from snapped_ and representative_[i] with the
-  /// input point whose site point i shares (i itself when point i is a site).
+  /// Fills keyed_ with the sites to triangulate from snapped_; with thinning, cell_index_,
+  /// cell_slot_, boundary_tag_ and extreme_ say which site a thinned point belongs to (compute).
   void select_sites() {
     const std::size_t n = snapped_.size();
-    representative_.resize(n);
-    for (std::size_t i = 0; i < n; ++i)
-      representative_[i] = static_cast<std::uint32_t>(i);
     const auto keep_all = [&] {
       keyed_.resize(n);
       for (std::size_t i = 0; i < n; ++i)
@@ -199,11 +208,15 @@ class ConcaveHull {
     const auto uw = static_cast<std::size_t>(w);
     cell_slot_.assign(static_cast<std::size_t>(w * h), none);  // first point, then slot
     cell_index_.resize(n);
+    occupied_.clear();  // the occupied cells in the order of their first points
     for (std::size_t i = 0; i < n; ++i) {
       const auto c = static_cast<std::size_t>((cell_of(snapped_[i][1]) - y0 + 1) * w +
                                               (cell_of(snapped_[i][0]) - x0 + 1));
       cell_index_[i] = static_cast<std::uint32_t>(c);
-      if (cell_slot_[c] == none) cell_slot_[c] = static_cast<std::uint32_t>(i);
+      if (cell_slot_[c] == none) {
+        cell_slot_[c] = static_cast<std::uint32_t>(i);
+        occupied_.push_back(static_cast<std::uint32_t>(c));
+      }
     }
     // The 8 neighbour directions; a boundary cell keeps, for each direction in which its
     // neighbour is empty, its point farthest that way (its extreme towards the empty side).
@@ -212,14 +225,12 @@ class ConcaveHull {
     const auto offset = [uw](const std::array<int, 2>& d) {
       return static_cast<std::ptrdiff_t>(d[1]) * static_cast<std::ptrdiff_t>(uw) + d[0];
     };
-    // Pass over the occupied cells (each met first through its first point): the mask of empty
-    // neighbours, and for boundary cells a block of 8 extreme slots. cell_slot_ then holds the
-    // cell's first point for interior cells, and 'none - 1 - block' for boundary cells.
+    // Pass over the occupied cells: the mask of empty neighbours, and for boundary cells a block
+    // of 8 extreme slots. cell_slot_ then holds the cell's first point for interior cells, and
+    // 'none - 1 - block' for boundary cells.
     mask_.clear();
     extreme_.clear();
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t c = cell_index_[i];
-      if (cell_slot_[c] != i) continue;
+    for (const std::uint32_t c : occupied_) {
       std::uint8_t mask = 0;
       for (std::size_t d = 0; d < dir.size(); ++d) {
         const std::uint32_t nb =
@@ -234,6 +245,7 @@ class ConcaveHull {
     }
     // cell_slot_ values >= boundary_tag are boundary blocks; below are first points.
     const std::uint32_t boundary_tag = none - 1 - static_cast<std::uint32_t>(mask_.size());
+    boundary_tag_ = boundary_tag;
     if (params_.sparse_interior) sparsen_interior(uw, static_cast<std::size_t>(h), x0, y0);
     keyed_.clear();
     for (std::size_t i = 0; i < n; ++i) {
@@ -246,8 +258,6 @@ class ConcaveHull {
           keyed_.push_back({cell_type{static_cast<std::int32_t>(cx * k + k / 2),
                                       static_cast<std::int32_t>(cy * k + k / 2)},
                             static_cast<std::uint32_t>(i)});
-        } else {
-          representative_[i] = slot;
         }
         continue;
       }
@@ -268,7 +278,7 @@ class ConcaveHull {
       }
     }
     // The extremes are the boundary sites; every other point of a boundary cell belongs to the
-    // site of its cell's first extreme.
+    // site of its cell's first extreme (compute).
     for (std::size_t block = 0; block < mask_.size(); ++block) {
       std::uint32_t first = none;
       for (std::size_t d = 0; d < dir.size(); ++d) {
@@ -280,47 +290,37 @@ class ConcaveHull {
           seen = seen || extreme_[block * dir.size() + d2] == e;
         if (!seen) keyed_.push_back({snapped_[e], e});
       }
-      extreme_[block * dir.size()] = first;  // reused below as the block's representative
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t slot = cell_slot_[cell_index_[i]];
-      if (slot <= boundary_tag) continue;
-      const std::uint32_t first = extreme_[(none - 1 - slot) * dir.size()];
-      bool is_site = static_cast<std::uint32_t>(i) == first;
-      const std::size_t block = none - 1 - slot;
-      for (std::size_t d = 1; d < dir.size() && !is_site; ++d)
-        is_site = extreme_[block * dir.size() + d] == i;
-      if (!is_site) representative_[i] = first;
+      extreme_[block * dir.size()] = first;  // from here on the block's representative
     }
   }
 
-  /// Sparse interior (see the file comment): a deep cell, one whose 7 x 7 block of cells is all
+  /// Sparse interior (see the file comment): a deep cell, one whose 5 x 5 block of cells is all
   /// occupied, gets no site unless both its (absolute) cell coordinates are even; its points are
   /// handed to the site of the even cell next to it (cell_slot_ takes that cell's first point).
   void sparsen_interior(std::size_t w, std::size_t h, std::int64_t x0, std::int64_t y0) {
     constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
-    constexpr std::uint8_t full = 7;  // the block's edge in cells
+    constexpr std::size_t full = 2 * deep_reach + 1;  // the block's edge in cells
     if (w < full || h < full) return;
-    run_.resize(w * h);  // occupied cells in a row ending here, up to 7
+    run_.resize(w * h);  // occupied cells in a row ending here, up to `full`
     for (std::size_t y = 0; y < h; ++y) {
       std::uint8_t count = 0;
       for (std::size_t x = 0; x < w; ++x) {
         const std::size_t c = y * w + x;
-        count =
-            cell_slot_[c] == none ? 0 : static_cast<std::uint8_t>(std::min<int>(count + 1, full));
+        count = cell_slot_[c] == none
+                    ? 0
+                    : static_cast<std::uint8_t>(std::min<std::size_t>(count + 1u, full));
         run_[c] = count;
       }
     }
-    for (std::size_t x = 3; x + 3 < w; ++x) {
-      std::uint8_t count = 0;  // rows in a column whose 7 cells around x are occupied
+    for (std::size_t x = deep_reach; x + deep_reach < w; ++x) {
+      std::size_t count = 0;  // rows in a column whose `full` cells around x are occupied
       for (std::size_t y = 0; y < h; ++y) {
-        count = run_[y * w + x + 3] == full
-                    ? static_cast<std::uint8_t>(std::min<int>(count + 1, full))
-                    : 0;
+        count = run_[y * w + x + deep_reach] == full ? std::min(count + 1, full) : 0;
         if (count < full) continue;
-        const std::size_t c = (y - 3) * w + x;  // the deep cell, centre of the block
+        const std::size_t row = y - deep_reach;  // the deep cell, centre of the block
+        const std::size_t c = row * w + x;
         const std::int64_t ax = static_cast<std::int64_t>(x) - 1 + x0;
-        const std::int64_t ay = static_cast<std::int64_t>(y - 3) - 1 + y0;
+        const std::int64_t ay = static_cast<std::int64_t>(row) - 1 + y0;
         if (((ax | ay) & 1) == 0) continue;
         const std::size_t even =
             c - static_cast<std::size_t>(ax & 1) - static_cast<std::size_t>(ay & 1) * w;
@@ -334,7 +334,7 @@ class ConcaveHull {
     // Distinct grid points; site_of_point_ maps every input point to its site.
     std::sort(keyed_.begin(), keyed_.end());
     sites_.clear();
-    site_of_point_.resize(snapped_.size());
+    site_of_point_.assign(snapped_.size(), std::numeric_limits<std::uint32_t>::max());
     for (const auto& [cell, index] : keyed_) {
       if (sites_.empty() || sites_.back() != cell) sites_.push_back(cell);
       site_of_point_[index] = static_cast<std::uint32_t>(sites_.size() - 1);
@@ -477,6 +477,9 @@ class ConcaveHull {
   }
 
   static constexpr std::size_t npos = static_cast<std::size_t>(-1);
+  static constexpr std::size_t directions = 8;  // extreme_ slots per boundary cell
+  /// Sparse interior: a deep cell's block of occupied cells reaches this far (cells) each way.
+  static constexpr std::size_t deep_reach = 2;
 
   /// The unused boundary edge leaving the end of edge `cur`, first clockwise from `cur` reversed.
   std::size_t next_edge(std::size_t cur) const {
@@ -533,14 +536,15 @@ class ConcaveHull {
   }
 
   ConcaveHullParams params_;
-  std::vector<cell_type> snapped_;             // per input point: its grid point
-  cell_type lo_{}, hi_{};                      // bounding box of snapped_
-  std::vector<std::uint32_t> representative_;  // per input point: see select_sites
-  std::vector<std::uint32_t> cell_slot_;       // thinning cells: see select_sites
-  std::vector<std::uint8_t> mask_;             // per boundary cell: its empty neighbours
-  std::vector<std::uint8_t> run_;              // sparsen_interior's row runs
-  std::vector<std::uint32_t> extreme_;         // per boundary cell: 8 extreme points
-  std::vector<std::uint32_t> cell_index_;      // per input point: its thinning cell
+  std::vector<cell_type> snapped_;         // per input point: its grid point
+  cell_type lo_{}, hi_{};                  // bounding box of snapped_
+  std::uint32_t boundary_tag_ = 0;         // cell_slot_ above it: a boundary block
+  std::vector<std::uint32_t> cell_slot_;   // thinning cells: see select_sites
+  std::vector<std::uint8_t> mask_;         // per boundary cell: its empty neighbours
+  std::vector<std::uint8_t> run_;          // sparsen_interior's row runs
+  std::vector<std::uint32_t> extreme_;     // per boundary cell: 8 extreme points
+  std::vector<std::uint32_t> cell_index_;  // per input point: its thinning cell
+  std::vector<std::uint32_t> occupied_;    // the occupied thinning cells
   std::vector<std::pair<cell_type, std::uint32_t>> keyed_;  // site grid point, input index
   std::vector<cell_type> sites_;
   std::vector<std::uint32_t> site_of_point_;

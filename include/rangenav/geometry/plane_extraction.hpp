@@ -330,13 +330,15 @@ class PlaneExtractor {
     }
     const auto w = static_cast<std::size_t>(wd), h = static_cast<std::size_t>(hd);
     constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
-    cells_.assign(w * h, none);  // union-find parent per occupied cell
-    piece_.resize(count);        // the cell of each inlier, then reused below
+    cells_.assign(w * h, none);    // union-find parent per occupied cell
+    cell_count_.assign(w * h, 0);  // points per cell, then per piece at its root
+    piece_.resize(count);          // the cell of each inlier
     for (std::size_t k = 0; k < count; ++k) {
       const auto cx = static_cast<std::size_t>(projected_[k].x() - x0);  // >= 1, truncation
       const auto cy = static_cast<std::size_t>(projected_[k].y() - y0);  // is floor here
       const std::size_t c = cy * w + cx;
       cells_[c] = static_cast<std::uint32_t>(c);
+      ++cell_count_[c];
       piece_[k] = static_cast<std::int32_t>(c);
     }
     const auto find = [&](std::uint32_t i) {
@@ -353,21 +355,24 @@ class PlaneExtractor {
           if (a != b) cells_[std::max(a, b)] = std::min(a, b);
         }
     }
-    // Points per root (counted in cell_count_, indexed by root cell), the largest group.
-    cell_count_.assign(w * h, 0);
+    // Points per piece, summed at its root (the piece's smallest cell, visited first), every
+    // cell pointing at its root from here on; the largest piece (ties: the smallest root).
     std::uint32_t best = 0, best_count = 0;
-    for (std::size_t k = 0; k < count; ++k) {
-      const std::uint32_t root = find(static_cast<std::uint32_t>(piece_[k]));
-      piece_[k] = static_cast<std::int32_t>(root);
-      if (++cell_count_[root] > best_count || (cell_count_[root] == best_count && root < best)) {
-        best_count = cell_count_[root];
-        best = root;
-      }
+    for (std::size_t c = 0; c < w * h; ++c) {
+      if (cells_[c] == none) continue;
+      const std::uint32_t root = find(static_cast<std::uint32_t>(c));
+      cells_[c] = root;
+      if (root != c) cell_count_[root] += cell_count_[c];
     }
+    for (std::size_t c = 0; c < w * h; ++c)
+      if (cells_[c] == c && cell_count_[c] > best_count) {
+        best_count = cell_count_[c];
+        best = static_cast<std::uint32_t>(c);
+      }
     std::size_t surface = 0;  // stable partition
     others_.clear();
     for (std::size_t k = 0; k < count; ++k)
-      if (static_cast<std::uint32_t>(piece_[k]) == best) {
+      if (cells_[static_cast<std::size_t>(piece_[k])] == best) {
         moments.add(remaining_[k]);
         remaining_[surface++] = remaining_[k];
       } else
