@@ -411,29 +411,27 @@ class PlaneExtractor {
     Point3d* const out = others_.data();
     Point2d* const proj = projected_.data();
     std::size_t count = 0, other = 0;
-    // The loop in scalars (Eigen's small fixed-size expressions here spilled to the stack and
-    // the inlier-only box became a branch): the same operations in the same order as
+    // The point read and written as scalars, the plane coordinates as one pair of columns
+    // (Eigen's fixed-size expressions on whole points here spilled to the stack, and the
+    // inlier-only box became a branch): the same operations in the same order as
     // plane.signed_distance(p) and (R.topRows<2>() * p + offset) * scale, so the same bits.
     const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
     const double d = plane.d;
     // frame.to_plane's first two rows, inlined: x_plane = R (x - o), Eq. (10).
     const Eigen::Matrix<double, 2, 3> rows = frame.world_to_plane.linear().topRows<2>();
-    const double r00 = rows(0, 0), r01 = rows(0, 1), r02 = rows(0, 2);
-    const double r10 = rows(1, 0), r11 = rows(1, 1), r12 = rows(1, 2);
-    const double ox = frame.world_to_plane.translation().x();
-    const double oy = frame.world_to_plane.translation().y();
+    const Point2d c0 = rows.col(0), c1 = rows.col(1), c2 = rows.col(2);
+    const Point2d o = frame.world_to_plane.translation().head<2>();
     for (std::size_t k = 0; k < n; ++k) {
       const double x = in[k].x(), y = in[k].y(), z = in[k].z();
       const double delta = nx * x + ny * y + nz * z + d;  // Eq. (2)
       const bool inlier = std::abs(delta) < thr;
-      const double qx = (r00 * x + r01 * y + r02 * z + ox) * scale;
-      const double qy = (r10 * x + r11 * y + r12 * z + oy) * scale;
+      const Point2d q = (c0 * x + c1 * y + c2 * z + o) * scale;  // both rows at once
       double* const a = in[count].data();
       double* const b = out[other].data();
       a[0] = b[0] = x;
       a[1] = b[1] = y;
       a[2] = b[2] = z;
-      proj[count] = Point2d(qx, qy);
+      proj[count] = q;
       count += inlier ? 1 : 0;
       other += inlier ? 0 : 1;
     }
