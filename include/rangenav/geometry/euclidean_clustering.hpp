@@ -206,9 +206,12 @@ template <class Scalar>
     }
   }
   // Component sizes at the roots (one find per run; parent[] of a run's first pixel is then its
-  // root), then one bucket per admitted component (count[root] becomes its bucket), then the
-  // runs' pixels appended run by run, which keeps every bucket in increasing index order.
+  // root), then one bucket per admitted component in increasing root order (count[root] becomes
+  // its bucket), then the runs' pixels appended run by run, which keeps every bucket in
+  // increasing index order. The runs (first and one-past-last pixel) are listed once, so the
+  // later passes visit runs, not pixels.
   std::vector<std::uint32_t> count(n, 0);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> runs;
   std::size_t total = 0;
   for (std::size_t r = 0; r < height; ++r)
     for (std::size_t i = r * width, end = i + width; i < end;) {
@@ -219,31 +222,26 @@ template <class Scalar>
         parent[i] = find(static_cast<std::uint32_t>(i));
         count[parent[i]] += static_cast<std::uint32_t>(j - i);
         total += j - i;
+        runs.emplace_back(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j));
       }
       i = j;
     }
   if (finite_points) *finite_points = total;
   std::vector<std::vector<std::uint32_t>> clusters;
-  for (std::size_t i = 0; i < n; ++i) {
+  for (const auto& [i, j] : runs) {  // every root is a run's first pixel; runs in index order
+    if (parent[i] != i) continue;
     const std::uint32_t size = count[i];
     count[i] = none;
-    if (size != 0 && size >= params.min_cluster_size && size <= params.max_cluster_size) {
+    if (size >= params.min_cluster_size && size <= params.max_cluster_size) {
       count[i] = static_cast<std::uint32_t>(clusters.size());
       clusters.emplace_back().reserve(size);
     }
   }
-  for (std::size_t r = 0; r < height; ++r)
-    for (std::size_t i = r * width, end = i + width; i < end;) {
-      std::size_t j = i + 1;
-      while (j < end && run[j] == i)
-        ++j;
-      if (run[i] == i)
-        if (const std::uint32_t s = count[parent[i]]; s != none) {
-          auto& cluster = clusters[s];
-          for (std::size_t k = i; k < j; ++k)
-            cluster.push_back(static_cast<std::uint32_t>(k));
-        }
-      i = j;
+  for (const auto& [i, j] : runs)
+    if (const std::uint32_t s = count[parent[i]]; s != none) {
+      auto& cluster = clusters[s];
+      for (std::uint32_t k = i; k < j; ++k)
+        cluster.push_back(k);
     }
   std::stable_sort(clusters.begin(), clusters.end(),
                    [](const auto& a, const auto& b) { return a.size() > b.size(); });
