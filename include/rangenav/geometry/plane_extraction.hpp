@@ -202,16 +202,7 @@ class PlaneExtractor {
       const PlaneFrame<double> hull_frame = PlaneFrame<double>::of(plane);
       const std::size_t count = split_inliers(plane, hull_frame, 1.0);
       std::vector<Polygon2<double>> pieces = hull_.compute(projected_, &piece_);
-      surface = 0;  // stable partition: the largest piece's points first
-      others_.clear();
-      for (std::size_t k = 0; k < count; ++k)
-        if (piece_[k] == 0) {
-          remaining_[surface++] = remaining_[k];
-        } else {
-          others_.push_back(remaining_[k]);
-        }
-      std::copy(others_.begin(), others_.end(),
-                remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
+      surface = keep_front(count, [&](std::size_t k) { return piece_[k] == 0; });  // largest piece
       moments = Moments::of(remaining_.data(), surface);
       if (pieces.empty() || surface < params_.min_inliers) break;
       if (const auto refit = fit_least_squares(moments, plane); refit && admissible(refit->normal))
@@ -383,16 +374,24 @@ class PlaneExtractor {
         best_count = cell_count_[c];
         best = static_cast<std::uint32_t>(c);
       }
-    std::size_t surface = 0;  // stable partition
-    others_.clear();
+    return keep_front(
+        count, [&](std::size_t k) { return cells_[static_cast<std::size_t>(piece_[k])] == best; });
+  }
+
+  /// Stable partition of remaining_[0 .. count): the points with keep(k) (k their position
+  /// before the call) move to the front in order, the others follow in order (through the reused
+  /// others_ buffer); returns how many were kept.
+  template <class Keep>
+  std::size_t keep_front(std::size_t count, Keep keep) {
+    if (others_.size() < count) others_.resize(count);
+    std::size_t kept = 0, other = 0;
     for (std::size_t k = 0; k < count; ++k)
-      if (cells_[static_cast<std::size_t>(piece_[k])] == best) {
-        remaining_[surface++] = remaining_[k];
-      } else
-        others_.push_back(remaining_[k]);
-    std::copy(others_.begin(), others_.end(),
-              remaining_.begin() + static_cast<std::ptrdiff_t>(surface));
-    return surface;
+      if (keep(k))
+        remaining_[kept++] = remaining_[k];
+      else
+        others_[other++] = remaining_[k];
+    std::copy_n(others_.begin(), other, remaining_.begin() + static_cast<std::ptrdiff_t>(kept));
+    return kept;
   }
 
   /// Moves the inliers of `plane` to the front of remaining_ (a stable partition); returns

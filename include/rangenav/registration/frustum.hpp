@@ -64,12 +64,18 @@ struct Frustum {
       const Scalar bearing = std::atan2(p.y(), p.x());
       return bearing >= angle_min && bearing <= angle_max;
     } else {
-      // Pyramid side planes: |y| <= x tan(h/2), |z| <= x tan(v/2) (inside-outside test with the
-      // planes' normals, paper 004 §3.2).
-      if (p.x() < near || p.x() > far) return false;
-      return std::abs(p.y()) <= p.x() * std::tan(horizontal_fov / 2) &&
-             std::abs(p.z()) <= p.x() * std::tan(vertical_fov / 2);
+      return contains_local(p, std::tan(horizontal_fov / 2), std::tan(vertical_fov / 2));
     }
+  }
+
+  /// contains_local in 3D with the tangents of the half opening angles given, tan(h/2) and
+  /// tan(v/2) (callers testing many points compute them once).
+  [[nodiscard]] bool contains_local(const Point<D, Scalar>& p, Scalar tan_half_h,
+                                    Scalar tan_half_v) const requires(D == 3) {
+    // Pyramid side planes: |y| <= x tan(h/2), |z| <= x tan(v/2) (inside-outside test with the
+    // planes' normals, paper 004 §3.2).
+    if (p.x() < near || p.x() > far) return false;
+    return std::abs(p.y()) <= p.x() * tan_half_h && std::abs(p.z()) <= p.x() * tan_half_v;
   }
 
   /// True when a point given in the parent frame lies inside the frustum.
@@ -126,15 +132,13 @@ struct FrustumRejector {
   }
 
  private:
-  // Frustum::contains_local with the tangents of the half opening angles given (the same test
-  // without two tan() calls per point).
+  // Frustum::contains_local, in 3D with the tangents computed once per alignment or iteration
+  // (not two tan() calls per point).
   [[nodiscard]] bool contains_local(const Point<D, Scalar>& p, Scalar tan_h, Scalar tan_v) const {
-    if constexpr (D == 2) {
+    if constexpr (D == 2)
       return frustum.contains_local(p);
-    } else {
-      if (p.x() < frustum.near || p.x() > frustum.far) return false;
-      return std::abs(p.y()) <= p.x() * tan_h && std::abs(p.z()) <= p.x() * tan_v;
-    }
+    else
+      return frustum.contains_local(p, tan_h, tan_v);
   }
 
   Transform<D, Scalar> model_to_sensor_ = Transform<D, Scalar>::Identity();
