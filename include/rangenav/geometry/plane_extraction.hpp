@@ -27,6 +27,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -277,26 +278,28 @@ class PlaneExtractor {
       if (count == 0) return m;
       m.p0 = p[0];
       m.count = count;
-      const double x0 = m.p0.x(), y0 = m.p0.y(), z0 = m.p0.z();
-      double sx = 0, sy = 0, sz = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
+      // The same products and sums, in the same order per sum (so the same bits), two at a
+      // time where they pair up: (qx, qy) and its squares, (qx, qy) qz.
+      const Eigen::Array2d xy0 = m.p0.head<2>().array();
+      const double z0 = m.p0.z();
+      Eigen::Array2d s_xy = Eigen::Array2d::Zero(), sq_xy = s_xy, xy_z = s_xy;
+      double sz = 0, xy = 0, zz = 0;
       for (std::size_t k = 0; k < count; ++k) {
-        const double qx = p[k].x() - x0, qy = p[k].y() - y0, qz = p[k].z() - z0;
-        sx += qx;
-        sy += qy;
+        const Eigen::Array2d q = p[k].head<2>().array() - xy0;
+        const double qz = p[k].z() - z0;
+        s_xy += q;
         sz += qz;
-        xx += qx * qx;
-        xy += qx * qy;
-        xz += qx * qz;
-        yy += qy * qy;
-        yz += qy * qz;
+        sq_xy += q * q;
+        xy += q.x() * q.y();
+        xy_z += q * qz;
         zz += qz * qz;
       }
-      m.sum = Point3d(sx, sy, sz);
-      m.xx = xx;
+      m.sum = Point3d(s_xy.x(), s_xy.y(), sz);
+      m.xx = sq_xy.x();
       m.xy = xy;
-      m.xz = xz;
-      m.yy = yy;
-      m.yz = yz;
+      m.xz = xy_z.x();
+      m.yy = sq_xy.y();
+      m.yz = xy_z.y();
       m.zz = zz;
       return m;
     }
@@ -434,16 +437,30 @@ class PlaneExtractor {
       other += inlier ? 0 : 1;
     }
     // The box of the inliers, in a pass of its own over them (in the loop above it became a
-    // branch on the inlier test).
-    Point2d lo = Point2d::Constant(std::numeric_limits<double>::max()), hi = -lo;
-    for (std::size_t k = 0; k < count; ++k) {
-      lo = lo.cwiseMin(proj[k]);
-      hi = hi.cwiseMax(proj[k]);
+    // branch on the inlier test), with four boxes in flight: one min and max chain waited on
+    // the latency of each minpd / maxpd (a fifth of this function's time).
+    constexpr std::size_t lanes = 4;
+    std::array<Point2d, lanes> lo, hi;
+    lo.fill(Point2d::Constant(std::numeric_limits<double>::max()));
+    hi.fill(Point2d::Constant(std::numeric_limits<double>::lowest()));
+    std::size_t k = 0;
+    for (; k + lanes <= count; k += lanes)
+      for (std::size_t j = 0; j < lanes; ++j) {
+        lo[j] = lo[j].cwiseMin(proj[k + j]);
+        hi[j] = hi[j].cwiseMax(proj[k + j]);
+      }
+    for (; k < count; ++k) {
+      lo[0] = lo[0].cwiseMin(proj[k]);
+      hi[0] = hi[0].cwiseMax(proj[k]);
+    }
+    for (std::size_t j = 1; j < lanes; ++j) {
+      lo[0] = lo[0].cwiseMin(lo[j]);
+      hi[0] = hi[0].cwiseMax(hi[j]);
     }
     std::copy(out, out + other, in + count);
     projected_.resize(count);
-    lo_ = lo;
-    hi_ = hi;
+    lo_ = lo[0];
+    hi_ = hi[0];
     return count;
   }
 
