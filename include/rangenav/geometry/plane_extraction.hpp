@@ -405,17 +405,21 @@ class PlaneExtractor {
     const std::size_t n = remaining_.size();
     if (others_.size() < n) others_.resize(n);
     projected_.resize(n);
-    // Branch-free stable partition (whether a point is an inlier is close to random where the
-    // band crosses noisy surfaces): every point is written to both sides and the side it belongs
-    // to advances. Writes to remaining_ never pass the read position.
+    // Stable partition with a branch on the inlier test: each point is written once, to its side
+    // (inliers with their plane coordinates). The points come in image order, so the test
+    // changes only where the band enters or leaves a surface and the branch is mostly predicted;
+    // the pass is bound by memory traffic, and the branch-free form (every point written to both
+    // sides and its plane coordinates computed for all) moved 88 instead of 40-48 bytes a point:
+    // the extraction 20.9 -> 19.9 ms (driver A/B, load 2.8). Writes to remaining_ never pass the
+    // read position.
     Point3d* const in = remaining_.data();
     Point3d* const out = others_.data();
     Point2d* const proj = projected_.data();
     std::size_t count = 0, other = 0;
     // The point read and written as scalars, the plane coordinates as one pair of columns
-    // (Eigen's fixed-size expressions on whole points here spilled to the stack, and the
-    // inlier-only box became a branch): the same operations in the same order as
-    // plane.signed_distance(p) and (R.topRows<2>() * p + offset) * scale, so the same bits.
+    // (Eigen's fixed-size expressions on whole points here spilled to the stack): the same
+    // operations in the same order as plane.signed_distance(p) and
+    // (R.topRows<2>() * p + offset) * scale, so the same bits.
     const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
     const double d = plane.d;
     // frame.to_plane's first two rows, inlined: x_plane = R (x - o), Eq. (10).
@@ -425,16 +429,20 @@ class PlaneExtractor {
     for (std::size_t k = 0; k < n; ++k) {
       const double x = in[k].x(), y = in[k].y(), z = in[k].z();
       const double delta = nx * x + ny * y + nz * z + d;  // Eq. (2)
-      const bool inlier = std::abs(delta) < thr;
-      const Point2d q = (c0 * x + c1 * y + c2 * z + o) * scale;  // both rows at once
-      double* const a = in[count].data();
-      double* const b = out[other].data();
-      a[0] = b[0] = x;
-      a[1] = b[1] = y;
-      a[2] = b[2] = z;
-      proj[count] = q;
-      count += inlier ? 1 : 0;
-      other += inlier ? 0 : 1;
+      if (std::abs(delta) < thr) {
+        double* const a = in[count].data();
+        a[0] = x;
+        a[1] = y;
+        a[2] = z;
+        proj[count] = (c0 * x + c1 * y + c2 * z + o) * scale;  // both rows at once
+        ++count;
+      } else {
+        double* const b = out[other].data();
+        b[0] = x;
+        b[1] = y;
+        b[2] = z;
+        ++other;
+      }
     }
     // The box of the inliers, in a pass of its own over them (in the loop above it became a
     // branch on the inlier test), with four boxes in flight: one min and max chain waited on
