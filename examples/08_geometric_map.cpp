@@ -344,7 +344,29 @@ int main(int argc, char** argv) {
     params.clustering.min_cluster_size = full ? 2000 : 150;
     params.planes.min_inliers = full ? 2000 : 150;
     params.planes.distance_threshold = std::max(0.02, 2.5 * run.sigma);
-    params.planes.hull.alpha = full ? 0.05 : 0.1;
+    params.planes.hull.alpha = 0.1;
+    if (full) {
+      // The clustering tolerance is the sensor's: two image neighbours on a surface seen at a
+      // grazing angle g from range r lie about r * dtheta / sin(g) apart (dtheta ~ 1 / fy, the
+      // angle between neighbouring rows: 1.6 mrad at 640 x 480). The counter top lies 0.16 m
+      // below the camera, 3.0-4.1 m away, seen at 2.2-3.0 deg: its rows lie 8-16 cm apart. With
+      // the default 5 cm no row joined the next, each row was a cluster below min_cluster_size,
+      // and the counter top was lost at sigma 0.005 and 0.02 (at sigma 0 and with objects a mixed
+      // fit of the top, its front edge and the wall, chained by the edge, stood in for it, 4.5-10
+      // deg off). The tolerance for this camera's working range (4 m, the far end of the counter
+      // top) and grazing angles down to 2.5 deg: 0.15 m. The alpha shape's alpha is as large, so
+      // that the hull joins the rows the clustering joined (a triangle spanning two rows d apart
+      // has a circumradius of about d / 2, and round 1's pieces of PlaneExtractor are groups of
+      // cells of alpha / 2): with alpha 0.1 the counter-top shape's weight delta (the extractions
+      // merged into it) was 3-4 in 33 key frames at sigma 0.02 (seeds 42, 1, 7), with 0.15 12-16.
+      // At 160 x 120 (dtheta 6.6 mrad) the counter top spans one or two image rows 32-64 cm
+      // apart, too few for a plane whatever the tolerance; 0.15 m there joined mixed fits into
+      // the map (sigma 0, seed 42: d_coeff 0.030 -> 0.053), so the default run keeps 5 cm.
+      constexpr double working_range = 4.0, min_grazing = 2.5 * std::numbers::pi / 180;
+      params.clustering.tolerance =
+          working_range / cp.intrinsics.fy / std::sin(min_grazing);  // 0.15 m
+      params.planes.hull.alpha = params.clustering.tolerance;
+    }
     params.planes.hull.resolution = 0.005;
     params.extraction_leaf = 0.0;  // the full-resolution frame (organised: image neighbours)
     params.organized_clustering = !kd_clustering;

@@ -593,6 +593,35 @@ TEST_CASE("PlaneExtractor finds the planes of a room corner with their outlines"
   }
 }
 
+TEST_CASE("PlaneExtractor's rms is the RMS distance of its inliers, far from the origin",
+          "[geometry]") {
+  // One tilted 0.6 m x 0.6 m patch, 1 cm pitch, uniform noise of +-4 mm along its normal, 200 m
+  // from the world origin: every point is an inlier of the one plane, and the reported rms (from
+  // the moments) is the brute-force RMS of n . p + d over the points.
+  const Point3d centre(200.0, -120.0, 35.0);
+  const Point3d normal = Point3d(0.3, -0.2, 1.0).normalized();
+  const Point3d u = normal.cross(Point3d::UnitX()).normalized(), v = normal.cross(u);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> noise(-0.004, 0.004);
+  std::vector<Point3d> pts;
+  for (int i = 0; i < 60; ++i)
+    for (int j = 0; j < 60; ++j)
+      pts.push_back(centre + 0.01 * (i - 30) * u + 0.01 * (j - 30) * v + noise(rng) * normal);
+  PlaneExtractionParams params;
+  params.min_inliers = 200;
+  PlaneExtractor extractor(params);
+  std::vector<ExtractedPlane> planes;
+  REQUIRE(extractor.extract(pts, rng, planes) == 1);
+  const ExtractedPlane& e = planes.front();
+  REQUIRE(e.inliers == pts.size());
+  double sum_sq = 0;
+  for (const Point3d& p : pts)
+    sum_sq += std::pow(e.shape.plane.signed_distance(p), 2);
+  CHECK(e.rms == Approx(std::sqrt(sum_sq / double(pts.size()))).epsilon(1e-9));
+  CHECK(e.rms == Approx(0.004 / std::sqrt(3.0)).epsilon(0.05));  // uniform noise's RMS
+  CHECK(std::abs(e.shape.plane.normal.dot(normal)) > 0.9999);
+}
+
 TEST_CASE("PlaneExtractor honours the orientation constraint and is deterministic", "[geometry]") {
   const auto pts = room_corner(0.0, 2);
   PlaneExtractionParams params;

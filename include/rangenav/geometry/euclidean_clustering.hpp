@@ -24,6 +24,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <numeric>
 #include <optional>
 #include <span>
 #include <string>
@@ -130,7 +131,6 @@ template <class Scalar>
                                    "must equal points.size() = " + std::to_string(points.size()));
   if (points.size() > std::numeric_limits<std::uint32_t>::max())
     detail::throw_invalid_argument(where, "points.size()", points.size(), "must fit 32 bits");
-  const std::size_t n = points.size();
   constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
   const Scalar tol_sq = static_cast<Scalar>(params.tolerance * params.tolerance);
   // A non-finite coordinate makes the squared distance NaN or infinite, never below tol_sq, so
@@ -143,26 +143,39 @@ template <class Scalar>
     return std::isfinite(points[i].x()) && std::isfinite(points[i].y()) &&
            std::isfinite(points[i].z());
   };
-  // Row runs: maximal chains of horizontally linked pixels. run[i] is the first pixel of i's run
-  // (none: a pixel that is no point). Union-find over the runs (their first pixels), the larger
-  // root always hung under the smaller, so every root is its component's smallest index.
-  // right[i]: pixel i is linked to i + 1.
-  std::vector<std::uint32_t> run(n), parent(n);
-  std::vector<std::uint8_t> right(n, 0);
-  for (std::size_t r = 0; r < height; ++r) {
+  // Row runs: maximal chains of horizontally linked pixels, numbered in pixel order (`runs` holds
+  // each one's first and one-past-last pixel). Union-find over the run numbers, the larger root
+  // always hung under the smaller, so every root is its component's first run (smallest pixel).
+  // Only two rows are held at a time (the run of each pixel, none for a pixel with no point, and
+  // whether it is linked to its right neighbour): the pass allocates O(width + runs), not O(n).
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> runs;
+  std::vector<std::uint32_t> parent;
+  runs.reserve(4 * height);
+  parent.reserve(4 * height);
+  std::vector<std::uint32_t> run_above(width), run_below(width);
+  std::vector<std::uint8_t> right_above(width), right_below(width);
+  const auto row_runs = [&](std::size_t r, std::vector<std::uint32_t>& run,
+                            std::vector<std::uint8_t>& right) {
     const std::size_t row = r * width;
-    std::size_t start = row;
+    std::size_t start = 0;  // column of the current run's first pixel
     for (std::size_t c = 0; c < width; ++c) {
       const std::size_t i = row + c;
       const bool linked = c + 1 < width && close(i, i + 1);
-      right[i] = linked ? 1 : 0;
-      run[i] = static_cast<std::uint32_t>(start);
+      right[c] = linked ? 1 : 0;
       if (linked) continue;
-      if (start == i && !finite(i)) run[i] = none;  // a lone pixel with no point
-      parent[start] = static_cast<std::uint32_t>(start);
-      start = i + 1;
+      if (start == c && !finite(i)) {  // a lone pixel with no point
+        run[c] = none;
+      } else {
+        const auto id = static_cast<std::uint32_t>(runs.size());
+        runs.emplace_back(static_cast<std::uint32_t>(row + start),
+                          static_cast<std::uint32_t>(i + 1));
+        parent.push_back(id);
+        std::fill(run.begin() + static_cast<std::ptrdiff_t>(start),
+                  run.begin() + static_cast<std::ptrdiff_t>(c + 1), id);
+      }
+      start = c + 1;
     }
-  }
+  };
   const auto find = [&](std::uint32_t i) {
     while (parent[i] != i)
       i = parent[i] = parent[parent[i]];
@@ -187,61 +200,56 @@ template <class Scalar>
   // on a densely sampled surface leaves about one vertical test per pixel; the components are
   // the same as with every 8-neighbour link tested.
   std::vector<std::uint8_t> vert(width);
+  if (height > 0) row_runs(0, run_above, right_above);
   for (std::size_t r = 0; r + 1 < height; ++r) {
+    row_runs(r + 1, run_below, right_below);
     const std::size_t row = r * width;
     for (std::size_t c = 0; c < width; ++c) {
       const std::size_t i = row + c, below = i + width;
-      vert[c] = run[i] != none && run[below] != none && close(i, below) ? 1 : 0;
-      if (vert[c]) unite(run[i], run[below]);
+      vert[c] = run_above[c] != none && run_below[c] != none && close(i, below) ? 1 : 0;
+      if (vert[c]) unite(run_above[c], run_below[c]);
     }
     for (std::size_t c = 0; c < width; ++c) {
       const std::size_t i = row + c, below = i + width;
-      if (run[i] == none) continue;
-      if (c + 1 < width && !(vert[c] && right[below]) && !(right[i] && vert[c + 1]) &&
-          run[below + 1] != none && close(i, below + 1))
-        unite(run[i], run[below + 1]);
-      if (c > 0 && !(vert[c] && right[below - 1]) && !(right[i - 1] && vert[c - 1]) &&
-          run[below - 1] != none && close(i, below - 1))
-        unite(run[i], run[below - 1]);
+      if (run_above[c] == none) continue;
+      if (c + 1 < width && !(vert[c] && right_below[c]) && !(right_above[c] && vert[c + 1]) &&
+          run_below[c + 1] != none && close(i, below + 1))
+        unite(run_above[c], run_below[c + 1]);
+      if (c > 0 && !(vert[c] && right_below[c - 1]) && !(right_above[c - 1] && vert[c - 1]) &&
+          run_below[c - 1] != none && close(i, below - 1))
+        unite(run_above[c], run_below[c - 1]);
     }
+    std::swap(run_above, run_below);
+    std::swap(right_above, right_below);
   }
-  // Component sizes at the roots (one find per run; parent[] of a run's first pixel is then its
-  // root), then one bucket per admitted component in increasing root order (count[root] becomes
-  // its bucket), then the runs' pixels appended run by run, which keeps every bucket in
-  // increasing index order. The runs (first and one-past-last pixel) are listed once, so the
-  // later passes visit runs, not pixels.
-  std::vector<std::uint32_t> count(n, 0);
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> runs;
+  // Component sizes at the roots (parent[] of every run becomes its root), then one bucket per
+  // admitted component in increasing root order (count[root] becomes its bucket), then the runs'
+  // pixels appended run by run, which keeps every bucket in increasing index order.
+  std::vector<std::uint32_t> count(runs.size(), 0);
   std::size_t total = 0;
-  for (std::size_t r = 0; r < height; ++r)
-    for (std::size_t i = r * width, end = i + width; i < end;) {
-      std::size_t j = i + 1;
-      while (j < end && run[j] == i)
-        ++j;
-      if (run[i] == i) {
-        parent[i] = find(static_cast<std::uint32_t>(i));
-        count[parent[i]] += static_cast<std::uint32_t>(j - i);
-        total += j - i;
-        runs.emplace_back(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j));
-      }
-      i = j;
-    }
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    parent[k] = find(static_cast<std::uint32_t>(k));
+    const std::uint32_t length = runs[k].second - runs[k].first;
+    count[parent[k]] += length;
+    total += length;
+  }
   if (finite_points) *finite_points = total;
   std::vector<std::vector<std::uint32_t>> clusters;
-  for (const auto& [i, j] : runs) {  // every root is a run's first pixel; runs in index order
-    if (parent[i] != i) continue;
-    const std::uint32_t size = count[i];
-    count[i] = none;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    if (parent[k] != k) continue;
+    const std::uint32_t size = count[k];
+    count[k] = none;
     if (size >= params.min_cluster_size && size <= params.max_cluster_size) {
-      count[i] = static_cast<std::uint32_t>(clusters.size());
+      count[k] = static_cast<std::uint32_t>(clusters.size());
       clusters.emplace_back().reserve(size);
     }
   }
-  for (const auto& [i, j] : runs)
-    if (const std::uint32_t s = count[parent[i]]; s != none) {
+  for (std::size_t k = 0; k < runs.size(); ++k)
+    if (const std::uint32_t s = count[parent[k]]; s != none) {
       auto& cluster = clusters[s];
-      for (std::uint32_t k = i; k < j; ++k)
-        cluster.push_back(k);
+      const std::size_t at = cluster.size();
+      cluster.resize(at + (runs[k].second - runs[k].first));
+      std::iota(cluster.begin() + static_cast<std::ptrdiff_t>(at), cluster.end(), runs[k].first);
     }
   std::stable_sort(clusters.begin(), clusters.end(),
                    [](const auto& a, const auto& b) { return a.size() > b.size(); });
