@@ -472,6 +472,17 @@ TEST_CASE("concave_hull sparse interior gives the same alpha shape", "[geometry]
         CHECK(sparse[k].holes == dense[k].holes);
       }
       CHECK(piece_sparse == piece_dense);
+      // One hull object reused across calls (as PlaneExtractor does), a small unthinned input
+      // in between: the same pieces per point as fresh objects.
+      ConcaveHull reused(params);
+      std::vector<std::int32_t> piece_again, piece_small, piece_small_fresh;
+      const std::vector<Point2d> small(pts.begin(), pts.begin() + 40);  // < 64: no thinning
+      (void)reused.compute(pts, &piece_again);
+      (void)reused.compute(small, &piece_small);
+      (void)ConcaveHull(params).compute(small, &piece_small_fresh);
+      CHECK(piece_small == piece_small_fresh);
+      (void)reused.compute(pts, &piece_again);
+      CHECK(piece_again == piece_dense);
     }
   }
 }

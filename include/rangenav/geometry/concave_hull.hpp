@@ -151,17 +151,21 @@ class ConcaveHull {
       }
       // A point that is no site (thinned away) takes the site of its cell's representative:
       // an interior cell's first point (or, sparse interior, its even neighbour's), a boundary
-      // cell's first extreme.
+      // cell's first extreme. That piece is looked up once per occupied cell (cell_slot_ holds it
+      // from here on), not once per point.
       constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+      if (thinned_)
+        for (const std::uint32_t c : occupied_) {
+          const std::uint32_t slot = cell_slot_[c];
+          const std::uint32_t rep =
+              slot <= boundary_tag_ ? slot : extreme_[(none - 1 - slot) * directions];
+          cell_slot_[c] = static_cast<std::uint32_t>(piece_of_site_[site_of_point_[rep]]);
+        }
       piece_of_point->resize(n);
       for (std::size_t i = 0; i < n; ++i) {
-        std::uint32_t s = site_of_point_[i];
-        if (s == none) {
-          const std::uint32_t slot = cell_slot_[cell_index_[i]];
-          s = site_of_point_[slot <= boundary_tag_ ? slot
-                                                   : extreme_[(none - 1 - slot) * directions]];
-        }
-        (*piece_of_point)[i] = piece_of_site_[s];
+        const std::uint32_t s = site_of_point_[i];
+        (*piece_of_point)[i] =
+            s != none ? piece_of_site_[s] : static_cast<std::int32_t>(cell_slot_[cell_index_[i]]);
       }
     }
     return result;
@@ -180,6 +184,7 @@ class ConcaveHull {
   /// cell_slot_, boundary_tag_ and extreme_ say which site a thinned point belongs to (compute).
   void select_sites() {
     const std::size_t n = snapped_.size();
+    thinned_ = false;
     const auto keep_all = [&] {
       keyed_.resize(n);
       for (std::size_t i = 0; i < n; ++i)
@@ -206,6 +211,7 @@ class ConcaveHull {
     if (w * h > std::int64_t(4 * n) + 4096) return keep_all();
     constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
     const auto uw = static_cast<std::size_t>(w);
+    thinned_ = true;
     cell_slot_.assign(static_cast<std::size_t>(w * h), none);  // first point, then slot
     cell_index_.resize(n);
     occupied_.clear();  // the occupied cells in the order of their first points
@@ -568,6 +574,7 @@ class ConcaveHull {
   std::vector<cell_type> snapped_;         // per input point: its grid point
   cell_type lo_{}, hi_{};                  // bounding box of snapped_
   std::uint32_t boundary_tag_ = 0;         // cell_slot_ above it: a boundary block
+  bool thinned_ = false;                   // select_sites thinned: cells and slots are valid
   std::vector<std::uint32_t> cell_slot_;   // thinning cells: see select_sites
   std::vector<std::uint8_t> mask_;         // per boundary cell: its empty neighbours
   std::vector<std::uint8_t> run_;          // sparsen_interior's row runs

@@ -386,8 +386,11 @@ class PlaneExtractor {
   template <class Keep>
   std::size_t keep_front(std::size_t count, Keep keep) {
     if (others_.size() < count) others_.resize(count);
-    std::size_t kept = 0, other = 0;
-    for (std::size_t k = 0; k < count; ++k)
+    std::size_t k = 0;  // the kept points before the first other one stay where they are
+    while (k < count && keep(k))
+      ++k;
+    std::size_t kept = k, other = 0;
+    for (; k < count; ++k)
       if (keep(k))
         remaining_[kept++] = remaining_[k];
       else
