@@ -271,6 +271,12 @@ class PlaneExtractor {
     Point3d p0 = Point3d::Zero(), sum = Point3d::Zero();
     double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
     std::size_t count = 0;
+    /// sum q q^T over the points.
+    [[nodiscard]] Eigen::Matrix3d scatter() const {
+      Eigen::Matrix3d s;
+      s << xx, xy, xz, xy, yy, yz, xz, yz, zz;
+      return s;
+    }
     /// The moments of p[0 .. count), in one tight pass over the contiguous points (cheaper than
     /// accumulating them point by point while partitioning).
     static Moments of(const Point3d* p, std::size_t count) {
@@ -313,8 +319,7 @@ class PlaneExtractor {
     const double inv = 1.0 / double(m.count);
     const Point3d mean = m.sum * inv;
     const Point3d centroid = m.p0 + mean;
-    Eigen::Matrix3d cov;  // covariance times count
-    cov << m.xx, m.xy, m.xz, m.xy, m.yy, m.yz, m.xz, m.yz, m.zz;
+    Eigen::Matrix3d cov = m.scatter();  // covariance times count, after the next line
     cov.noalias() -= double(m.count) * mean * mean.transpose();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
     Point3d normal = eig.eigenvectors().col(0);
@@ -502,8 +507,7 @@ class PlaneExtractor {
     // only the in-plane spread (about 1e-11 of the result for a metre-sized, mm-thick surface).
     const Point3d& n = plane.normal;
     const double e0 = plane.signed_distance(m.p0);
-    const double nqq = n.x() * n.x() * m.xx + n.y() * n.y() * m.yy + n.z() * n.z() * m.zz +
-                       2 * (n.x() * n.y() * m.xy + n.x() * n.z() * m.xz + n.y() * n.z() * m.yz);
+    const double nqq = n.dot(m.scatter() * n);
     const double sum_sq = nqq + 2 * e0 * n.dot(m.sum) + double(m.count) * e0 * e0;
     e.inliers = m.count;
     e.rms = std::sqrt(std::max(0.0, sum_sq) / double(m.count));
