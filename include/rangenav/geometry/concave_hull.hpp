@@ -122,51 +122,60 @@ class ConcaveHull {
     const IntegerGrid grid{params_.resolution};
     const std::size_t n = traits::size(cloud);
     const double inv = 1.0 / grid.resolution;
-    snapped_.resize(n);
-    cell_type lo{std::numeric_limits<std::int32_t>::max(),
-                 std::numeric_limits<std::int32_t>::max()};
-    cell_type hi{std::numeric_limits<std::int32_t>::min(),
-                 std::numeric_limits<std::int32_t>::min()};
+    // The box of the scaled coordinates, and whether every point is finite and fits the grid;
+    // a point snaps to round_half_away of its scaled coordinates, which is monotonic, so the
+    // box's corners snap to the box of the grid points. Points are snapped again where needed
+    // (select_sites), none is stored.
+    double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+    bool fits = true;
     for (std::size_t i = 0; i < n; ++i) {
       const Point2d p = traits::point(cloud, i).template cast<double>();
       const double gx = p.x() * inv, gy = p.y() * inv;
-      cell_type g;
-      if (std::abs(gx) <= IntegerGrid::limit && std::abs(gy) <= IntegerGrid::limit) [[likely]]
-        g = {round_half_away(gx), round_half_away(gy)};
-      else  // NaN or out of range: the grid names the point in its message
-        g = grid.snap(p, where, "cloud[" + std::to_string(i) + "]");
-      snapped_[i] = g;
-      lo = {std::min(lo[0], g[0]), std::min(lo[1], g[1])};
-      hi = {std::max(hi[0], g[0]), std::max(hi[1], g[1])};
+      fits &= std::abs(gx) <= IntegerGrid::limit && std::abs(gy) <= IntegerGrid::limit;
+      x0 = std::min(x0, gx);
+      x1 = std::max(x1, gx);
+      y0 = std::min(y0, gy);
+      y1 = std::max(y1, gy);
     }
-    lo_ = lo;
-    hi_ = hi;
-    select_sites();
-    auto result = build(grid);
-    if (piece_of_point) {  // per site, then per point through its site (a thinned point: its
-      piece_of_site_.resize(sites_.size());  // representative's)
+    if (!fits)  // NaN or out of range: the first such point, named by the grid in its message
+      for (std::size_t i = 0; i < n; ++i)
+        (void)grid.snap(traits::point(cloud, i).template cast<double>(), where,
+                        "cloud[" + std::to_string(i) + "]");
+    if (n > 0) {
+      lo_ = {round_half_away(x0), round_half_away(y0)};
+      hi_ = {round_half_away(x1), round_half_away(y1)};
+    }
+    const auto snap = [&cloud, inv](std::size_t i) -> cell_type {
+      const Point2d p = traits::point(cloud, i).template cast<double>();
+      return {round_half_away(p.x() * inv), round_half_away(p.y() * inv)};
+    };
+    select_sites(n, snap);
+    auto result = build(n, grid);
+    if (piece_of_point) {  // per site, then per point: a site's own point takes its site's
+      piece_of_site_.resize(sites_.size());  // piece, every other point its cell's (thinned)
       for (std::size_t s = 0; s < sites_.size(); ++s) {
         const std::uint32_t root = find(static_cast<std::uint32_t>(s));
         piece_of_site_[s] = root < piece_of_root_.size() ? piece_of_root_[root] : -1;
       }
+      piece_of_point->resize(n);
       // A point that is no site (thinned away) takes the site of its cell's representative:
       // an interior cell's first point (or, sparse interior, its even neighbour's), a boundary
       // cell's first extreme. That piece is looked up once per occupied cell (cell_slot_ holds it
       // from here on), not once per point.
       constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
-      if (thinned_)
+      if (thinned_) {
         for (const std::uint32_t c : occupied_) {
           const std::uint32_t slot = cell_slot_[c];
           const std::uint32_t rep =
               slot <= boundary_tag_ ? slot : extreme_[(none - 1 - slot) * directions];
           cell_slot_[c] = static_cast<std::uint32_t>(piece_of_site_[site_of_point_[rep]]);
         }
-      piece_of_point->resize(n);
-      for (std::size_t i = 0; i < n; ++i) {
-        const std::uint32_t s = site_of_point_[i];
-        (*piece_of_point)[i] =
-            s != none ? piece_of_site_[s] : static_cast<std::int32_t>(cell_slot_[cell_index_[i]]);
+        for (std::size_t i = 0; i < n; ++i)
+          (*piece_of_point)[i] = static_cast<std::int32_t>(cell_slot_[cell_index_[i]]);
       }
+      // The points that name a site (all points without thinning) take their site's piece.
+      for (const auto& [cell, index] : keyed_)
+        (*piece_of_point)[index] = piece_of_site_[site_of_point_[index]];
     }
     return result;
   }
@@ -180,15 +189,16 @@ class ConcaveHull {
     bool operator==(const DirectedEdge&) const = default;
   };
 
-  /// Fills keyed_ with the sites to triangulate from snapped_; with thinning, cell_index_,
-  /// cell_slot_, boundary_tag_ and extreme_ say which site a thinned point belongs to (compute).
-  void select_sites() {
-    const std::size_t n = snapped_.size();
+  /// Fills keyed_ with the sites to triangulate from the `n` input points, `snap(i)` being the
+  /// grid point of point i (lo_ and hi_ their box); with thinning, cell_index_, cell_slot_,
+  /// boundary_tag_ and extreme_ say which site a thinned point belongs to (compute).
+  template <class Snap>
+  void select_sites(std::size_t n, const Snap& snap) {
     thinned_ = false;
     const auto keep_all = [&] {
       keyed_.resize(n);
       for (std::size_t i = 0; i < n; ++i)
-        keyed_[i] = {snapped_[i], static_cast<std::uint32_t>(i)};
+        keyed_[i] = {snap(i), static_cast<std::uint32_t>(i)};
     };
     const double cell_steps = std::floor(params_.thinning * params_.alpha / params_.resolution);
     if (!(cell_steps >= 2) || n < 64) return keep_all();
@@ -242,11 +252,12 @@ class ConcaveHull {
       fill(row_of_, gy0, span_y, y0, w);
     }
     for (std::size_t i = 0; i < n; ++i) {
-      const auto c = by_table
-                         ? std::size_t(row_of_[static_cast<std::size_t>(snapped_[i][1] - gy0)]) +
-                               column_of_[static_cast<std::size_t>(snapped_[i][0] - gx0)]
-                         : static_cast<std::size_t>((cell_of(snapped_[i][1]) - y0 + 1) * w +
-                                                    (cell_of(snapped_[i][0]) - x0 + 1));
+      const cell_type g = snap(i);
+      const auto c =
+          by_table
+              ? std::size_t(row_of_[static_cast<std::size_t>(g[1] - gy0)]) +
+                    column_of_[static_cast<std::size_t>(g[0] - gx0)]
+              : static_cast<std::size_t>((cell_of(g[1]) - y0 + 1) * w + (cell_of(g[0]) - x0 + 1));
       cell_index_[i] = static_cast<std::uint32_t>(c);
       if (cell_slot_[c] == none) {
         cell_slot_[c] = static_cast<std::uint32_t>(i);
@@ -282,34 +293,37 @@ class ConcaveHull {
     const std::uint32_t boundary_tag = none - 1 - static_cast<std::uint32_t>(mask_.size());
     boundary_tag_ = boundary_tag;
     if (params_.sparse_interior) sparsen_interior(uw, static_cast<std::size_t>(h), x0, y0);
+    // Interior cells that keep a site: one at the cell's centre, named by the cell's first point.
     keyed_.clear();
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t c = cell_index_[i];
+    for (const std::uint32_t c : occupied_) {
       const std::uint32_t slot = cell_slot_[c];
-      if (slot <= boundary_tag) {  // interior: one site at the cell's centre
-        if (slot == i) {
-          const auto cx = static_cast<std::int64_t>(c % uw) - 1 + x0;
-          const auto cy = static_cast<std::int64_t>(c / uw) - 1 + y0;
-          keyed_.push_back({cell_type{static_cast<std::int32_t>(cx * k + k / 2),
-                                      static_cast<std::int32_t>(cy * k + k / 2)},
-                            static_cast<std::uint32_t>(i)});
-        }
-        continue;
-      }
+      if (slot > boundary_tag || cell_index_[slot] != c) continue;  // boundary, or sparse
+      const auto cx = static_cast<std::int64_t>(c % uw) - 1 + x0;
+      const auto cy = static_cast<std::int64_t>(c / uw) - 1 + y0;
+      keyed_.push_back({cell_type{static_cast<std::int32_t>(cx * k + k / 2),
+                                  static_cast<std::int32_t>(cy * k + k / 2)},
+                        slot});
+    }
+    // The extremes of the boundary cells, in a pass over the points that skips the interior
+    // ones; a boundary point is snapped again (the same grid point), a slot keeps its extreme's.
+    extreme_at_.resize(extreme_.size());
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t slot = cell_slot_[cell_index_[i]];
+      if (slot <= boundary_tag) continue;  // interior
       const std::uint32_t block = none - 1 - slot;
       const std::uint8_t mask = mask_[block];
-      const cell_type& g = snapped_[i];
+      const cell_type g = snap(i);
       for (std::size_t d = 0; d < dir.size(); ++d) {
         if (!(mask & (1u << d))) continue;
         std::uint32_t& best = extreme_[block * dir.size() + d];
-        if (best == none) {
-          best = static_cast<std::uint32_t>(i);
-          continue;
+        cell_type& b = extreme_at_[block * dir.size() + d];
+        if (best != none) {
+          const std::int64_t gain = std::int64_t(dir[d][0]) * (std::int64_t(g[0]) - b[0]) +
+                                    std::int64_t(dir[d][1]) * (std::int64_t(g[1]) - b[1]);
+          if (gain <= 0) continue;
         }
-        const cell_type& b = snapped_[best];
-        const std::int64_t gain = std::int64_t(dir[d][0]) * (std::int64_t(g[0]) - b[0]) +
-                                  std::int64_t(dir[d][1]) * (std::int64_t(g[1]) - b[1]);
-        if (gain > 0) best = static_cast<std::uint32_t>(i);
+        best = static_cast<std::uint32_t>(i);
+        b = g;
       }
     }
     // The extremes are the boundary sites; every other point of a boundary cell belongs to the
@@ -323,7 +337,7 @@ class ConcaveHull {
         bool seen = false;  // the same point may be extreme in several directions
         for (std::size_t d2 = 0; d2 < d; ++d2)
           seen = seen || extreme_[block * dir.size() + d2] == e;
-        if (!seen) keyed_.push_back({snapped_[e], e});
+        if (!seen) keyed_.push_back({extreme_at_[block * dir.size() + d], e});
       }
       extreme_[block * dir.size()] = first;  // from here on the block's representative
     }
@@ -364,12 +378,13 @@ class ConcaveHull {
     }
   }
 
-  std::vector<Polygon2<double>> build(const IntegerGrid& grid) {
+  std::vector<Polygon2<double>> build(std::size_t n, const IntegerGrid& grid) {
     namespace bp = boost::polygon;
-    // Distinct grid points; site_of_point_ maps every input point to its site.
+    // Distinct grid points; site_of_point_ maps the points of keyed_ (every input point without
+    // thinning) to their sites.
     std::sort(keyed_.begin(), keyed_.end());
     sites_.clear();
-    site_of_point_.assign(snapped_.size(), std::numeric_limits<std::uint32_t>::max());
+    site_of_point_.resize(n);
     for (const auto& [cell, index] : keyed_) {
       if (sites_.empty() || sites_.back() != cell) sites_.push_back(cell);
       site_of_point_[index] = static_cast<std::uint32_t>(sites_.size() - 1);
@@ -571,14 +586,14 @@ class ConcaveHull {
   }
 
   ConcaveHullParams params_;
-  std::vector<cell_type> snapped_;         // per input point: its grid point
-  cell_type lo_{}, hi_{};                  // bounding box of snapped_
+  cell_type lo_{}, hi_{};                  // bounding box of the input's grid points
   std::uint32_t boundary_tag_ = 0;         // cell_slot_ above it: a boundary block
   bool thinned_ = false;                   // select_sites thinned: cells and slots are valid
   std::vector<std::uint32_t> cell_slot_;   // thinning cells: see select_sites
   std::vector<std::uint8_t> mask_;         // per boundary cell: its empty neighbours
   std::vector<std::uint8_t> run_;          // sparsen_interior's row runs
   std::vector<std::uint32_t> extreme_;     // per boundary cell: 8 extreme points
+  std::vector<cell_type> extreme_at_;      // their grid points
   std::vector<std::uint32_t> cell_index_;  // per input point: its thinning cell
   std::vector<std::uint32_t> column_of_;   // per grid x in the box: its cell column + 1
   std::vector<std::uint32_t> row_of_;      // per grid y in the box: (its cell row + 1) * width
