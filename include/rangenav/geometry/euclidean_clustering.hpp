@@ -136,91 +136,90 @@ template <class Scalar>
   // A non-finite coordinate makes the squared distance NaN or infinite, never below tol_sq, so
   // `close` needs no finiteness test; only a pixel without any link is tested (finite: a
   // singleton, else no point).
+  const Point<3, Scalar>* const p = points.data();
   const auto close = [&](std::size_t i, std::size_t j) {
-    return (points[i] - points[j]).squaredNorm() < tol_sq;
+    const Scalar dx = p[i].x() - p[j].x(), dy = p[i].y() - p[j].y(), dz = p[i].z() - p[j].z();
+    return dx * dx + dy * dy + dz * dz < tol_sq;
   };
   const auto finite = [&](std::size_t i) {
-    return std::isfinite(points[i].x()) && std::isfinite(points[i].y()) &&
-           std::isfinite(points[i].z());
+    return std::isfinite(p[i].x()) && std::isfinite(p[i].y()) && std::isfinite(p[i].z());
   };
   // Row runs: maximal chains of horizontally linked pixels, numbered in pixel order (`runs` holds
-  // each one's first and one-past-last pixel). Union-find over the run numbers, the larger root
-  // always hung under the smaller, so every root is its component's first run (smallest pixel).
-  // Only two rows are held at a time (the run of each pixel, none for a pixel with no point, and
-  // whether it is linked to its right neighbour): the pass allocates O(width + runs), not O(n).
+  // each one's first and one-past-last pixel; every pixel of a run is a point). Union-find over
+  // the run numbers, the larger root always hung under the smaller, so every root is its
+  // component's first run (smallest pixel). No per-pixel array: the pass allocates O(runs).
   std::vector<std::pair<std::uint32_t, std::uint32_t>> runs;
   std::vector<std::uint32_t> parent;
   runs.reserve(4 * height);
   parent.reserve(4 * height);
-  std::vector<std::uint32_t> run_above(width), run_below(width);
-  std::vector<std::uint8_t> right_above(width), right_below(width);
-  const auto row_runs = [&](std::size_t r, std::vector<std::uint32_t>& run,
-                            std::vector<std::uint8_t>& right) {
-    const std::size_t row = r * width;
-    std::size_t start = 0;  // column of the current run's first pixel
-    for (std::size_t c = 0; c < width; ++c) {
-      const std::size_t i = row + c;
-      const bool linked = c + 1 < width && close(i, i + 1);
-      right[c] = linked ? 1 : 0;
-      if (linked) continue;
-      if (start == c && !finite(i)) {  // a lone pixel with no point
-        run[c] = none;
-      } else {
-        const auto id = static_cast<std::uint32_t>(runs.size());
-        runs.emplace_back(static_cast<std::uint32_t>(row + start),
-                          static_cast<std::uint32_t>(i + 1));
-        parent.push_back(id);
-        std::fill(run.begin() + static_cast<std::ptrdiff_t>(start),
-                  run.begin() + static_cast<std::ptrdiff_t>(c + 1), id);
-      }
-      start = c + 1;
-    }
-  };
   const auto find = [&](std::uint32_t i) {
     while (parent[i] != i)
       i = parent[i] = parent[parent[i]];
     return i;
   };
-  // The last pair of runs united: consecutive pixels of two overlapping runs repeat it.
-  std::uint32_t last_a = none, last_b = none;
-  const auto unite = [&](std::uint32_t a, std::uint32_t b) {
-    if (a == last_a && b == last_b) return;
-    last_a = a;
-    last_b = b;
-    a = find(a);
-    b = find(b);
-    if (a < b)
-      parent[b] = a;
-    else if (b < a)
-      parent[a] = b;
+  // Links between two rows, run against run: a run above and a run below that touch (a pixel of
+  // one among the three pixels under or over a pixel of the other) are tested only while they
+  // are not yet in one component, and only until one link joins them (vertical, then the two
+  // diagonals of each column of the touching span). A link between runs already joined cannot
+  // change the components, so they are those of every 8-neighbour link tested; on a densely
+  // sampled surface the run below meets the run above at its first column and every other
+  // pixel pair is skipped, so the row pass below is the per-pixel cost: one horizontal test.
+  const auto link_rows = [&](std::size_t above_begin, std::size_t above_end,
+                             std::size_t below_begin, std::size_t below_end,
+                             std::size_t row_above) {
+    const auto w = static_cast<std::ptrdiff_t>(width);
+    const auto up = static_cast<std::ptrdiff_t>(row_above), down = up + w;
+    std::size_t first = below_begin;  // the first run below that can touch the current run above
+    for (std::size_t a = above_begin; a < above_end; ++a) {
+      const std::ptrdiff_t a0 = runs[a].first - up, a1 = runs[a].second - up;  // columns
+      while (first < below_end && std::ptrdiff_t(runs[first].second) - down < a0)
+        ++first;
+      for (std::size_t b = first; b < below_end; ++b) {
+        const std::ptrdiff_t b0 = runs[b].first - down, b1 = runs[b].second - down;
+        if (b0 > a1) break;  // this and later runs below are past the run above
+        std::uint32_t ra = find(static_cast<std::uint32_t>(a));
+        std::uint32_t rb = find(static_cast<std::uint32_t>(b));
+        if (ra == rb) continue;
+        const auto linked = [&] {
+          for (std::ptrdiff_t c = std::max(a0, b0 - 1); c < std::min(a1, b1 + 1); ++c) {
+            const auto i = static_cast<std::size_t>(up + c), j = static_cast<std::size_t>(down + c);
+            if (c >= b0 && c < b1 && close(i, j)) return true;
+            if (c + 1 >= b0 && c + 1 < b1 && close(i, j + 1)) return true;
+            if (c - 1 >= b0 && c - 1 < b1 && close(i, j - 1)) return true;
+          }
+          return false;
+        };
+        if (!linked()) continue;
+        if (rb < ra) std::swap(ra, rb);
+        parent[rb] = ra;
+      }
+    }
   };
-  // Links to the next row: first the vertical ones (vert[c]: pixel c of this row is linked to
-  // the one below), then the diagonals, each tested only when no path of two tested links
-  // already joins its ends (for i -> below+1: i - below - below+1 or i - i+1 - below+1), which
-  // on a densely sampled surface leaves about one vertical test per pixel; the components are
-  // the same as with every 8-neighbour link tested.
-  std::vector<std::uint8_t> vert(width);
-  if (height > 0) row_runs(0, run_above, right_above);
-  for (std::size_t r = 0; r + 1 < height; ++r) {
-    row_runs(r + 1, run_below, right_below);
-    const std::size_t row = r * width;
+  std::size_t above_begin = 0;
+  for (std::size_t r = 0; r < height; ++r) {
+    const std::size_t row = r * width, row_begin = runs.size();
+    const Point<3, Scalar>* const last = p + row + width - 1;  // the row's last pixel
     for (std::size_t c = 0; c < width; ++c) {
-      const std::size_t i = row + c, below = i + width;
-      vert[c] = run_above[c] != none && run_below[c] != none && close(i, below) ? 1 : 0;
-      if (vert[c]) unite(run_above[c], run_below[c]);
+      const std::size_t start = c;
+      // The run's last pixel: the previous point kept in registers, one test per pixel.
+      const Point<3, Scalar>* q = p + row + c;
+      Scalar x = q->x(), y = q->y(), z = q->z();
+      for (; q != last; ++q) {
+        const Scalar nx = q[1].x(), ny = q[1].y(), nz = q[1].z();
+        const Scalar dx = nx - x, dy = ny - y, dz = nz - z;
+        if (!(dx * dx + dy * dy + dz * dz < tol_sq)) break;
+        x = nx;
+        y = ny;
+        z = nz;
+      }
+      c = static_cast<std::size_t>(q - p) - row;
+      if (c == start && !finite(row + c)) continue;  // a lone pixel with no point
+      parent.push_back(static_cast<std::uint32_t>(runs.size()));
+      runs.emplace_back(static_cast<std::uint32_t>(row + start),
+                        static_cast<std::uint32_t>(row + c + 1));
     }
-    for (std::size_t c = 0; c < width; ++c) {
-      const std::size_t i = row + c, below = i + width;
-      if (run_above[c] == none) continue;
-      if (c + 1 < width && !(vert[c] && right_below[c]) && !(right_above[c] && vert[c + 1]) &&
-          run_below[c + 1] != none && close(i, below + 1))
-        unite(run_above[c], run_below[c + 1]);
-      if (c > 0 && !(vert[c] && right_below[c - 1]) && !(right_above[c - 1] && vert[c - 1]) &&
-          run_below[c - 1] != none && close(i, below - 1))
-        unite(run_above[c], run_below[c - 1]);
-    }
-    std::swap(run_above, run_below);
-    std::swap(right_above, right_below);
+    if (r > 0) link_rows(above_begin, row_begin, row_begin, runs.size(), row - width);
+    above_begin = row_begin;
   }
   // Component sizes at the roots (parent[] of every run becomes its root), then one bucket per
   // admitted component in increasing root order (count[root] becomes its bucket), then the runs'
