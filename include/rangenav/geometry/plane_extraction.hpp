@@ -167,6 +167,9 @@ class PlaneExtractor {
   /// through indices.
   template <class Map>
   void gather(std::span<const Point3d> points, std::span<const std::uint32_t> cluster, Map map) {
+    if (cluster.size() > std::size_t(std::numeric_limits<std::int32_t>::max()))
+      detail::throw_invalid_argument("PlaneExtractor::extract", "cluster.size()", cluster.size(),
+                                     "must fit 31 bits");
     gathered_.resize(cluster.size());
     std::size_t kept = 0;
     for (const std::uint32_t i : cluster) {
@@ -214,7 +217,7 @@ class PlaneExtractor {
       if (!piece)  // too sparse for the stride: every point
         piece = largest_cell_piece(split_inliers<false>(plane, ransac_frame, cells, 1), 0.0);
       std::size_t surface = *piece;
-      Moments moments = Moments::of(remaining_.data(), inlier_index_.data(), surface);
+      Moments moments = Moments::of(remaining_.data(), piece_.data(), surface);
       if (const auto refit = fit_least_squares(moments, plane); refit && admissible(refit->normal))
         plane = *refit;
       const PlaneFrame<double> hull_frame = PlaneFrame<double>::of(plane);
@@ -301,8 +304,10 @@ class PlaneExtractor {
     }
     /// The moments of p[index[0]], ..., p[index[count - 1]], the same sums in the same order as
     /// over those points stored one after the other.
-    static Moments of(const Point3d* p, const std::uint32_t* index, std::size_t count) {
-      return of_points(count, [p, index](std::size_t k) -> const Point3d& { return p[index[k]]; });
+    static Moments of(const Point3d* p, const std::int32_t* index, std::size_t count) {
+      return of_points(count, [p, index](std::size_t k) -> const Point3d& {
+        return p[static_cast<std::size_t>(index[k])];
+      });
     }
     template <class At>
     static Moments of_points(std::size_t count, At at) {
@@ -355,7 +360,7 @@ class PlaneExtractor {
     return Plane3<double>::through(centroid, normal);
   }
 
-  /// Round 1's piece: narrows inlier_index_[0 .. count) (the inliers' positions in remaining_;
+  /// Round 1's piece: narrows piece_[0 .. count) (the inliers' positions in remaining_;
   /// projected_: their plane coordinates in cells, from split_inliers<false>) to the points of
   /// the largest 8-connected group of occupied cells of alpha / 2, in order; returns their count.
   /// None, with nothing narrowed, when the points are fewer than min_per_cell times the
@@ -373,7 +378,6 @@ class PlaneExtractor {
     constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
     cells_.assign(w * h, none);    // union-find parent per occupied cell
     cell_count_.assign(w * h, 0);  // points per cell, then per piece at its root
-    piece_.resize(count);          // the cell of each inlier
     std::size_t occupied = 0;
     for (std::size_t k = 0; k < count; ++k) {
       const auto cx = static_cast<std::size_t>(projected_[k].x() - x0);  // >= 1, truncation
@@ -382,7 +386,6 @@ class PlaneExtractor {
       occupied += cell_count_[c] == 0 ? 1 : 0;
       cells_[c] = static_cast<std::uint32_t>(c);
       ++cell_count_[c];
-      piece_[k] = static_cast<std::int32_t>(c);
     }
     if (double(count) < min_per_cell * double(occupied)) return std::nullopt;
     const auto find = [&](std::uint32_t i) {
@@ -414,9 +417,11 @@ class PlaneExtractor {
         best = static_cast<std::uint32_t>(c);
       }
     std::size_t kept = 0;
-    for (std::size_t k = 0; k < count; ++k) {
-      inlier_index_[kept] = inlier_index_[k];
-      kept += cells_[static_cast<std::size_t>(piece_[k])] == best ? 1 : 0;
+    for (std::size_t k = 0; k < count; ++k) {  // each inlier's cell again (no array of them)
+      const auto cx = static_cast<std::size_t>(projected_[k].x() - x0);
+      const auto cy = static_cast<std::size_t>(projected_[k].y() - y0);
+      piece_[kept] = piece_[k];
+      kept += cells_[cy * w + cx] == best ? 1 : 0;
     }
     return kept;
   }
@@ -442,7 +447,7 @@ class PlaneExtractor {
 
   /// Finds the inliers of `plane` in remaining_ and returns their count. Move: they are moved to
   /// the front of remaining_ (a stable partition); else only every stride-th point is looked at,
-  /// remaining_ is left as it is and inlier_index_ lists the inliers' positions in it.
+  /// remaining_ is left as it is and piece_ lists the inliers' positions in it.
   /// projected_ receives the inliers in `frame`'s plane coordinates (Eq. 1-3) times `scale`, in
   /// order.
   template <bool Move>
@@ -450,8 +455,12 @@ class PlaneExtractor {
                             double scale, std::size_t stride = 1) {
     const double thr = params_.distance_threshold;
     const std::size_t n = remaining_.size();
-    if (Move && others_.size() < n) others_.resize(n);
-    if (!Move && inlier_index_.size() < n) inlier_index_.resize(n);
+    // others_ is sized in round 1 too, as when round 1 moved points: allocated after round 1's
+    // buffers instead, it made glibc give the heap back to the system after every key frame of
+    // the benchmark's fresh mapper per frame and fault it in again (perf stat -e page-faults over
+    // a BM_keyframe_total run: 19k -> 103k, about +3 ms per key frame).
+    if (others_.size() < n) others_.resize(n);
+    if (!Move && piece_.size() < n) piece_.resize(n);
     projected_.resize(n);
     // Stable partition with a branch on the inlier test: each point is written once, to its side
     // (inliers with their plane coordinates). The points come in image order, so the test
@@ -485,7 +494,7 @@ class PlaneExtractor {
           a[1] = y;
           a[2] = z;
         } else {
-          inlier_index_[count] = static_cast<std::uint32_t>(k);
+          piece_[count] = static_cast<std::int32_t>(k);
         }
         proj[count] = (c0 * x + c1 * y + c2 * z + o) * scale;  // both rows at once
         ++count;
@@ -572,8 +581,8 @@ class PlaneExtractor {
   std::vector<std::uint32_t> all_;
   std::vector<Point2d> projected_;
   Point2d lo_, hi_;  // bounding box of projected_
+  // Round 1: the inliers' positions in remaining_; round 2: the hull piece of each inlier.
   std::vector<std::int32_t> piece_;
-  std::vector<std::uint32_t> inlier_index_;  // round 1's inliers, positions in remaining_
   std::vector<Point3d> others_;
   std::vector<Point3d> subset_;
   std::vector<std::uint32_t> cells_;
