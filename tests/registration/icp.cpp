@@ -657,6 +657,99 @@ TEST_CASE("ICP's neighbour reuse forms the pairs of a search in every iteration"
   }
 }
 
+TEST_CASE("coarse-to-fine ICP: a data subset first, then all points, to the same pose",
+          "[registration]") {
+  // The scene of the planar-front test (floor, wall, box; sparse model with normals, denser
+  // data through a known transform). IcpParams::coarse_points iterates on every k-th data point
+  // (k = n / coarse_points) until that subset converges, then on all points: the result must be the
+  // truth's as closely as the all-points ICP's (both converge on the same pairs' minimum), with
+  // fewer searches.
+  std::mt19937 rng(5);
+  const FacedCloud model = faces_3d(rng, 300.0, true);
+  const FacedCloud scene = faces_3d(rng, 600.0, true);
+  const Transform3d truth = make_transform3(0.04, -0.05, 0.01, 0.0, 0.01, 0.05);
+  std::vector<Eigen::Vector3d> data;
+  for (const auto& p : scene.points)
+    data.push_back(truth.inverse(Eigen::Isometry) * p);
+  const KdTree<3, double> tree(model.points);
+  using PlaneIcp =
+      BasicIcp<3, double, PointToPlaneSolver<double>, DecayingDistanceRejector<double>>;
+  const std::size_t n = data.size();
+  const auto make = [&](std::size_t stride, bool reuse) {
+    PlaneIcp icp;
+    icp.solver.model_normals = model.normals;
+    icp.params.max_iterations = 50;
+    icp.params.coarse_points = stride > 1 ? n / stride : 0;  // every stride-th point
+    icp.params.reuse_neighbors = reuse;
+    icp.params.translation_epsilon = icp.params.rotation_epsilon = 1e-7;
+    icp.rejector<DecayingDistanceRejector<double>>() = {0.3, 0.05, 0.7};
+    return icp;
+  };
+  auto all = make(1, false);
+  const auto reference = all.align(tree, data, Transform3d::Identity());
+  REQUIRE(reference.reason == IcpTermination::converged);
+  CHECK(reference.coarse_iterations == 0);
+  const auto [et_ref, er_ref] = transform_error<3>(reference.transform, truth);
+  CHECK(et_ref < 0.005);
+  for (const std::size_t stride : {2u, 4u, 8u}) {
+    INFO("stride " << stride);
+    auto coarse = make(stride, false);
+    const auto r = coarse.align(tree, data, Transform3d::Identity());
+    REQUIRE(r.reason == IcpTermination::converged);
+    // The subset ran (and converged: the decaying threshold settles after 4 iterations), the
+    // last iterations ran on all points.
+    CHECK(r.coarse_iterations >= 5);
+    CHECK(r.iterations > r.coarse_iterations);
+    CHECK(r.matched_count > n * 9 / 10);
+    // Without neighbour reuse every visited data point is one search: the coarse iterations
+    // visit ceil(n / stride) points, the others n. Fails if the subset is ignored.
+    const std::size_t k = n / (n / stride);  // the subset's step
+    const std::size_t subset = (n + k - 1) / k;
+    CHECK(r.neighbor_searches ==
+          static_cast<std::size_t>(r.coarse_iterations) * subset +
+              static_cast<std::size_t>(r.iterations - r.coarse_iterations) * n);
+    // Same pose as the all-points ICP: both stop at the minimum of the full set's pairs.
+    const auto [et, er] = transform_error<3>(r.transform, truth);
+    CHECK(et < 0.005);
+    CHECK(er < 0.002);
+    const auto [dt, dr] = transform_error<3>(r.transform, reference.transform);
+    CHECK(dt < 1e-4);
+    CHECK(dr < 1e-4);
+    // With reuse: the same pose again, in fewer searches than the all-points ICP with reuse.
+    auto coarse_reuse = make(stride, true);
+    auto all_reuse = make(1, true);
+    const auto a = coarse_reuse.align(tree, data, Transform3d::Identity());
+    const auto b = all_reuse.align(tree, data, Transform3d::Identity());
+    CHECK(a.transform.matrix() == r.transform.matrix());
+    CHECK(a.neighbor_searches < b.neighbor_searches);
+  }
+  SECTION("a subset with fewer pairs than the solver needs falls back to all points") {
+    const std::vector<Eigen::Vector3d> few(data.begin(), data.begin() + 5);
+    Icp<3> icp;  // point-to-point: 3 pairs at least; every 5th of 5 points is 1
+    icp.params.coarse_points = 1;
+    const auto r = icp.align(tree, few, Transform3d::Identity());
+    CHECK(r.coarse_iterations == 0);
+    CHECK(r.reason != IcpTermination::too_few_pairs);
+    CHECK(r.matched_count == 5);
+  }
+  SECTION("too few data points for a subset of coarse_points: all points throughout") {
+    auto coarse = make(1, false);
+    coarse.params.coarse_points = n / 2 + 1;
+    const auto r = coarse.align(tree, data, Transform3d::Identity());
+    CHECK(r.coarse_iterations == 0);
+    CHECK(r.transform.matrix() == reference.transform.matrix());
+  }
+  SECTION("the last iteration of the budget runs on all points") {
+    auto coarse = make(4, false);
+    coarse.params.max_iterations = 3;
+    const auto r = coarse.align(tree, data, Transform3d::Identity());
+    CHECK(r.iterations == 3);
+    CHECK(r.coarse_iterations == 2);
+    const std::size_t k = n / (n / 4);
+    CHECK(r.neighbor_searches == 2 * ((n + k - 1) / k) + n);
+  }
+}
+
 TEST_CASE("ICP reports a featureless corridor as degenerate", "[registration]") {
   const auto model = test::corridor_2d();
   const KdTree<2, double> tree(model);

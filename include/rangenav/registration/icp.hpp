@@ -88,6 +88,13 @@ struct IcpParams {
   /// Model points kept per data point for reuse_neighbors (>= 2): more make a search costlier
   /// but let it serve larger moves of the estimate.
   std::size_t reuse_candidates = 2;
+  /// Coarse-to-fine: while the estimate still moves (large early thresholds, steps of
+  /// centimetres), iterate on a subset of about `coarse_points` data points only (every k-th,
+  /// k = floor(data points / coarse_points)); once that subset meets the convergence test (the
+  /// epsilons above, every rejector settled), continue on all points to convergence. The last
+  /// iteration always uses all points, so matched_count, fitness and the final pairs are the
+  /// full set's. 0, or data with fewer than 2 coarse_points points, = all points throughout.
+  std::size_t coarse_points = 0;
 
   void validate() const {
     constexpr std::string_view where = "IcpParams";
@@ -109,7 +116,9 @@ struct IcpResult {
   Transform<D, Scalar> transform = Transform<D, Scalar>::Identity();  ///< data -> model frame
   bool converged = false;
   IcpTermination reason = IcpTermination::max_iterations;
-  int iterations = 0;             ///< iterations run (each with a correspondence search)
+  int iterations = 0;  ///< iterations run (each with a correspondence search)
+  /// Of them, those on the IcpParams::coarse_points subset of the data (the first ones).
+  int coarse_iterations = 0;
   std::size_t matched_count = 0;  ///< data points the last search paired (before rejectors)
   std::size_t inlier_count = 0;   ///< pairs kept by the rejectors in the last iteration
   std::size_t data_count = 0;     ///< finite data points
@@ -214,18 +223,28 @@ class BasicIcp {
     IcpContext<D, Scalar> ctx{0, transform, model.size(), data_.size()};
     std::apply([&](auto&... r) { (begin_rejector(r, model.size()), ...); }, rejectors);
     pairs_.reserve(data_.size());
+    const std::size_t stride = params.coarse_points > 0 ? data_.size() / params.coarse_points : 1;
+    bool coarse = stride > 1;
 
     for (int it = 0; it < params.max_iterations; ++it) {
       ctx.iteration = it;
       ctx.transform = transform;
       result.iterations = it + 1;
-      result.neighbor_searches += match(model, ctx);
+      // The last iteration of the budget is never a coarse one.
+      const bool coarse_now = coarse && it + 1 < params.max_iterations;
+      result.neighbor_searches += match(model, ctx, coarse_now ? stride : 1);
       result.matched_count = pairs_.size();
       std::apply([&](auto&... r) { (reject_with(r, ctx), ...); }, rejectors);
       if (pairs_.size() < min_pairs) {
+        if (coarse_now) {  // too sparse a subset: this iteration again on all points
+          coarse = false;
+          --it;
+          continue;
+        }
         result.reason = IcpTermination::too_few_pairs;
         break;
       }
+      if (coarse_now) ++result.coarse_iterations;
       // A solver that refines from the current transform (PointToPlaneSolver) gets it.
       const std::span<const correspondence_type> kept(pairs_);
       std::optional<transform_type> next;
@@ -244,6 +263,10 @@ class BasicIcp {
       bool settled = true;
       std::apply([&](const auto&... r) { ((settled = settled && is_settled(r, ctx)), ...); },
                  rejectors);
+      if (small && settled && coarse_now) {
+        coarse = false;  // the subset converged: refine on all points
+        continue;
+      }
       if (small && settled) {
         result.reason = IcpTermination::converged;
         result.converged = true;
@@ -268,9 +291,10 @@ class BasicIcp {
     return result;
   }
 
-  // The pairs of one iteration; returns the number of model searches run.
+  // The pairs of one iteration, of every `stride`-th data point; returns the number of model
+  // searches run.
   template <class Model>
-  std::size_t match(const Model& model, const IcpContext<D, Scalar>& ctx) {
+  std::size_t match(const Model& model, const IcpContext<D, Scalar>& ctx, std::size_t stride) {
     Scalar bound_sq = unbounded_sq<Scalar>;
     std::apply([&](const auto&... r) { ((bound_sq = std::min(bound_sq, bound_of(r, ctx))), ...); },
                rejectors);
@@ -284,7 +308,7 @@ class BasicIcp {
     }
     const Scalar bound = std::sqrt(bound_sq);
     std::size_t searches = 0;
-    for (std::size_t j = 0; j < data_.size(); ++j) {
+    for (std::size_t j = 0; j < data_.size(); j += stride) {
       const point_type p = t * data_[j];
       bool admitted = true;
       std::apply([&](const auto&... r) { ((admitted = admitted && admits(r, ctx, p)), ...); },
