@@ -509,8 +509,12 @@ TEST_CASE("concave_hull interior thinning keeps the shape, its holes, pieces and
   std::vector<std::int32_t> piece_full, piece_thin;
   ConcaveHullParams params{0.05, 0.001, 0.0};
   const auto full = ConcaveHull(params).compute(pts, &piece_full);
-  for (const double thinning : {0.25, 0.5}) {
+  // Boundary cells keep their extremes towards every empty neighbour (all_corners) or, the
+  // default, corner extremes only at convex corners and notches of the occupied cells.
+  for (const auto& [thinning, all_corners] : {std::pair{0.25, true}, std::pair{0.5, true},
+                                              std::pair{0.25, false}, std::pair{0.5, false}}) {
     params.thinning = thinning;
+    params.all_corners = all_corners;
     const auto thin = ConcaveHull(params).compute(pts, &piece_thin);
     REQUIRE(full.size() == 2);
     REQUIRE(thin.size() == 2);

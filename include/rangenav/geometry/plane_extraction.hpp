@@ -19,8 +19,10 @@
 // neighbouring occupied cells of alpha / 2 (cheap); after it, the pieces of the alpha shape.
 //
 // For speed (beyond the paper, same method): RANSAC hypotheses are scored on a random subset of
-// the cluster (`evaluation_subset`) and only the best is counted on all of it; the hull thins the
-// plane's interior (ConcaveHullParams::thinning, 0.5 here); scratch buffers are reused.
+// the cluster (`evaluation_subset`) and only the best is counted on all of it; the refit before
+// round 2 (which only gives round 2 its band) sees every `coarse_stride`-th point of a dense
+// cluster; the hull thins the plane's interior (ConcaveHullParams::thinning, 0.5 here); scratch
+// buffers are reused.
 //
 // Randomness comes from the caller's engine: with the same engine state the result is identical.
 
@@ -69,6 +71,13 @@ struct PlaneExtractionParams {
   double max_axis_angle = 10.0 * std::numbers::pi / 180.0;  ///< rad
   /// When set, normals are flipped to face this point (e.g. the sensor position).
   std::optional<Point3d> viewpoint;
+  /// Round 1 of every plane (the least-squares refit of the RANSAC plane on the largest piece of
+  /// its inliers, which gives round 2 the band it collects the surface in) looks at every
+  /// coarse_stride-th point of the cluster only (1 = all), or at every point when those are too
+  /// sparse to connect the cells of a surface (fewer than 4 sampled inliers per occupied cell).
+  /// Beyond the paper, for speed: the final plane, its inliers and hull come from round 2 on all
+  /// the points.
+  std::size_t coarse_stride = 4;
   /// Alpha-shape hull of the projected inliers; the interior of the dense planes of a range
   /// camera is thinned in cells of half alpha (ConcaveHullParams::thinning).
   ConcaveHullParams hull{.thinning = 0.5};
@@ -158,6 +167,9 @@ class PlaneExtractor {
   /// through indices.
   template <class Map>
   void gather(std::span<const Point3d> points, std::span<const std::uint32_t> cluster, Map map) {
+    if (cluster.size() > std::size_t(std::numeric_limits<std::int32_t>::max()))
+      detail::throw_invalid_argument("PlaneExtractor::extract", "cluster.size()", cluster.size(),
+                                     "must fit 31 bits");
     gathered_.resize(cluster.size());
     std::size_t kept = 0;
     for (const std::uint32_t i : cluster) {
@@ -189,19 +201,27 @@ class PlaneExtractor {
       // 8-connected groups of occupied cells of alpha / 2 (points of neighbouring cells are at
       // most 1.4 alpha apart, where the alpha shape joins points up to 2 alpha apart), which
       // is much cheaper than a triangulation and only decides what the refit sees.
-      // The RANSAC plane's inliers (the verification count on the whole cluster: too few, no
-      // plane) moved to the front.
+      // Round 1 looks at every coarse_stride-th remaining point only and reorders nothing: the
+      // RANSAC plane's inliers among them are listed by their positions in remaining_, the list
+      // narrowed to the largest piece and the refit's moments summed over the listed points.
+      // It only gives round 2 its band, so it decides nothing by counts: round 2 counts all
+      // the points (the verification of the hypothesis: too few inliers in the surface, no
+      // plane).
       Plane3<double> plane = *hypothesis;
       const double cells = 2.0 / params_.hull.alpha;  // round 1's cells of alpha / 2
-      std::size_t surface = split_inliers(plane, PlaneFrame<double>::of(plane), cells);
-      if (surface < params_.min_inliers) break;
-      surface = largest_cell_piece(surface);
-      if (surface < params_.min_inliers) break;
-      Moments moments = Moments::of(remaining_.data(), surface);
+      const PlaneFrame<double> ransac_frame = PlaneFrame<double>::of(plane);
+      const std::size_t stride = std::max<std::size_t>(1, params_.coarse_stride);
+      std::optional<std::size_t> piece =
+          largest_cell_piece(split_inliers<false>(plane, ransac_frame, cells, stride),
+                             stride > 1 ? min_coarse_per_cell : 0.0);
+      if (!piece)  // too sparse for the stride: every point
+        piece = largest_cell_piece(split_inliers<false>(plane, ransac_frame, cells, 1), 0.0);
+      std::size_t surface = *piece;
+      Moments moments = Moments::of(remaining_.data(), piece_.data(), surface);
       if (const auto refit = fit_least_squares(moments, plane); refit && admissible(refit->normal))
         plane = *refit;
       const PlaneFrame<double> hull_frame = PlaneFrame<double>::of(plane);
-      const std::size_t count = split_inliers(plane, hull_frame, 1.0);
+      const std::size_t count = split_inliers<true>(plane, hull_frame, 1.0);
       std::vector<Polygon2<double>> pieces = hull_.compute(projected_, &piece_);
       surface = keep_front(count, [&](std::size_t k) { return piece_[k] == 0; });  // largest piece
       moments = Moments::of(remaining_.data(), surface);
@@ -280,9 +300,20 @@ class PlaneExtractor {
     /// The moments of p[0 .. count), in one tight pass over the contiguous points (cheaper than
     /// accumulating them point by point while partitioning).
     static Moments of(const Point3d* p, std::size_t count) {
+      return of_points(count, [p](std::size_t k) -> const Point3d& { return p[k]; });
+    }
+    /// The moments of p[index[0]], ..., p[index[count - 1]], the same sums in the same order as
+    /// over those points stored one after the other.
+    static Moments of(const Point3d* p, const std::int32_t* index, std::size_t count) {
+      return of_points(count, [p, index](std::size_t k) -> const Point3d& {
+        return p[static_cast<std::size_t>(index[k])];
+      });
+    }
+    template <class At>
+    static Moments of_points(std::size_t count, At at) {
       Moments m;
       if (count == 0) return m;
-      m.p0 = p[0];
+      m.p0 = at(0);
       m.count = count;
       // The same products and sums, in the same order per sum (so the same bits), two at a
       // time where they pair up: (qx, qy) and its squares, (qx, qy) qz.
@@ -291,8 +322,9 @@ class PlaneExtractor {
       Eigen::Array2d s_xy = Eigen::Array2d::Zero(), sq_xy = s_xy, xy_z = s_xy;
       double sz = 0, xy = 0, zz = 0;
       for (std::size_t k = 0; k < count; ++k) {
-        const Eigen::Array2d q = p[k].head<2>().array() - xy0;
-        const double qz = p[k].z() - z0;
+        const Point3d& pk = at(k);
+        const Eigen::Array2d q = pk.head<2>().array() - xy0;
+        const double qz = pk.z() - z0;
         s_xy += q;
         sz += qz;
         sq_xy += q * q;
@@ -328,10 +360,12 @@ class PlaneExtractor {
     return Plane3<double>::through(centroid, normal);
   }
 
-  /// Round 1's piece: moves the points of the largest 8-connected group of occupied cells of
-  /// alpha / 2, among the `count` inliers at the front of remaining_ (projected_: their plane
-  /// coordinates in cells, from split_inliers), to the front (stably); returns their count.
-  std::size_t largest_cell_piece(std::size_t count) {
+  /// Round 1's piece: narrows piece_[0 .. count) (the inliers' positions in remaining_;
+  /// projected_: their plane coordinates in cells, from split_inliers<false>) to the points of
+  /// the largest 8-connected group of occupied cells of alpha / 2, in order; returns their count.
+  /// None, with nothing narrowed, when the points are fewer than min_per_cell times the
+  /// occupied cells (a sample too sparse to connect the cells of a surface).
+  std::optional<std::size_t> largest_cell_piece(std::size_t count, double min_per_cell) {
     if (count == 0) return 0;
     double x0 = lo_.x(), y0 = lo_.y(), x1 = hi_.x(), y1 = hi_.y();
     // Cells with a margin of one on each side; a plane too large for a dense grid of a few
@@ -344,15 +378,16 @@ class PlaneExtractor {
     constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
     cells_.assign(w * h, none);    // union-find parent per occupied cell
     cell_count_.assign(w * h, 0);  // points per cell, then per piece at its root
-    piece_.resize(count);          // the cell of each inlier
+    std::size_t occupied = 0;
     for (std::size_t k = 0; k < count; ++k) {
       const auto cx = static_cast<std::size_t>(projected_[k].x() - x0);  // >= 1, truncation
       const auto cy = static_cast<std::size_t>(projected_[k].y() - y0);  // is floor here
       const std::size_t c = cy * w + cx;
+      occupied += cell_count_[c] == 0 ? 1 : 0;
       cells_[c] = static_cast<std::uint32_t>(c);
       ++cell_count_[c];
-      piece_[k] = static_cast<std::int32_t>(c);
     }
+    if (double(count) < min_per_cell * double(occupied)) return std::nullopt;
     const auto find = [&](std::uint32_t i) {
       while (cells_[i] != i)
         i = cells_[i] = cells_[cells_[i]];
@@ -381,8 +416,14 @@ class PlaneExtractor {
         best_count = cell_count_[c];
         best = static_cast<std::uint32_t>(c);
       }
-    return keep_front(
-        count, [&](std::size_t k) { return cells_[static_cast<std::size_t>(piece_[k])] == best; });
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < count; ++k) {  // each inlier's cell again (no array of them)
+      const auto cx = static_cast<std::size_t>(projected_[k].x() - x0);
+      const auto cy = static_cast<std::size_t>(projected_[k].y() - y0);
+      piece_[kept] = piece_[k];
+      kept += cells_[cy * w + cx] == best ? 1 : 0;
+    }
+    return kept;
   }
 
   /// Stable partition of remaining_[0 .. count): the points with keep(k) (k their position
@@ -404,14 +445,22 @@ class PlaneExtractor {
     return kept;
   }
 
-  /// Moves the inliers of `plane` to the front of remaining_ (a stable partition); returns
-  /// their count. projected_ receives the inliers in `frame`'s plane coordinates (Eq. 1-3) times
-  /// `scale`, in order.
+  /// Finds the inliers of `plane` in remaining_ and returns their count. Move: they are moved to
+  /// the front of remaining_ (a stable partition); else only every stride-th point is looked at,
+  /// remaining_ is left as it is and piece_ lists the inliers' positions in it.
+  /// projected_ receives the inliers in `frame`'s plane coordinates (Eq. 1-3) times `scale`, in
+  /// order.
+  template <bool Move>
   std::size_t split_inliers(const Plane3<double>& plane, const PlaneFrame<double>& frame,
-                            double scale) {
+                            double scale, std::size_t stride = 1) {
     const double thr = params_.distance_threshold;
     const std::size_t n = remaining_.size();
+    // others_ is sized in round 1 too, as when round 1 moved points: allocated after round 1's
+    // buffers instead, it made glibc give the heap back to the system after every key frame of
+    // the benchmark's fresh mapper per frame and fault it in again (perf stat -e page-faults over
+    // a BM_keyframe_total run: 19k -> 103k, about +3 ms per key frame).
     if (others_.size() < n) others_.resize(n);
+    if (!Move && piece_.size() < n) piece_.resize(n);
     projected_.resize(n);
     // Stable partition with a branch on the inlier test: each point is written once, to its side
     // (inliers with their plane coordinates). The points come in image order, so the test
@@ -421,9 +470,10 @@ class PlaneExtractor {
     // the extraction 20.9 -> 19.9 ms (driver A/B, load 2.8). Writes to remaining_ never pass the
     // read position.
     Point3d* const in = remaining_.data();
-    Point3d* const out = others_.data();
+    [[maybe_unused]] Point3d* const out = others_.data();
     Point2d* const proj = projected_.data();
-    std::size_t count = 0, other = 0;
+    std::size_t count = 0;
+    [[maybe_unused]] std::size_t other = 0;
     // The point read and written as scalars, the plane coordinates as one pair of columns
     // (Eigen's fixed-size expressions on whole points here spilled to the stack): the same
     // operations in the same order as plane.signed_distance(p) and
@@ -434,17 +484,21 @@ class PlaneExtractor {
     const Eigen::Matrix<double, 2, 3> rows = frame.world_to_plane.linear().topRows<2>();
     const Point2d c0 = rows.col(0), c1 = rows.col(1), c2 = rows.col(2);
     const Point2d o = frame.world_to_plane.translation().head<2>();
-    for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t k = 0; k < n; k += Move ? 1 : stride) {
       const double x = in[k].x(), y = in[k].y(), z = in[k].z();
       const double delta = nx * x + ny * y + nz * z + d;  // Eq. (2)
       if (std::abs(delta) < thr) {
-        double* const a = in[count].data();
-        a[0] = x;
-        a[1] = y;
-        a[2] = z;
+        if constexpr (Move) {
+          double* const a = in[count].data();
+          a[0] = x;
+          a[1] = y;
+          a[2] = z;
+        } else {
+          piece_[count] = static_cast<std::int32_t>(k);
+        }
         proj[count] = (c0 * x + c1 * y + c2 * z + o) * scale;  // both rows at once
         ++count;
-      } else {
+      } else if constexpr (Move) {
         double* const b = out[other].data();
         b[0] = x;
         b[1] = y;
@@ -473,7 +527,7 @@ class PlaneExtractor {
       lo[0] = lo[0].cwiseMin(lo[j]);
       hi[0] = hi[0].cwiseMax(hi[j]);
     }
-    std::copy(out, out + other, in + count);
+    if constexpr (Move) std::copy(out, out + other, in + count);
     projected_.resize(count);
     lo_ = lo[0];
     hi_ = hi[0];
@@ -514,6 +568,11 @@ class PlaneExtractor {
     out.push_back(std::move(e));
   }
 
+  /// Round 1 with coarse_stride > 1 needs this many sampled inliers per occupied cell on
+  /// average, else it looks at every point (a range camera's surfaces at a few metres have tens
+  /// of points per cell of 2.5 cm; samples 2.5 cm apart, one per cell, would leave gaps).
+  static constexpr double min_coarse_per_cell = 4.0;
+
   PlaneExtractionParams params_;
   ConcaveHull hull_;
   std::vector<Point3d> gathered_;  // the cluster's finite points (reordered by the passes)
@@ -522,6 +581,7 @@ class PlaneExtractor {
   std::vector<std::uint32_t> all_;
   std::vector<Point2d> projected_;
   Point2d lo_, hi_;  // bounding box of projected_
+  // Round 1: the inliers' positions in remaining_; round 2: the hull piece of each inlier.
   std::vector<std::int32_t> piece_;
   std::vector<Point3d> others_;
   std::vector<Point3d> subset_;
