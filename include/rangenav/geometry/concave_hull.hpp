@@ -23,10 +23,11 @@
 // c = f * alpha. A cell whose 8 neighbours all hold points is interior: its points are replaced by
 // one site at the cell's centre; the interior sites form a lattice whose Delaunay faces have
 // circumradius c / sqrt 2 <= alpha / (2 sqrt 2), so the interior stays filled. Every other
-// occupied cell is on the boundary layer and keeps, for each empty neighbour, its input point
-// farthest towards that neighbour: the outermost points, through which the alpha shape's
-// boundary runs, are kept as they are, and an empty circle of radius > alpha >= 2 c, which is what
-// removes faces from the shape, is still bounded by them. The outline, holes and pieces come out
+// occupied cell is on the boundary layer and keeps, for each empty neighbour (corner neighbours:
+// see "Boundary corners"), its input point farthest towards that neighbour (its snapped grid
+// point, as a site): the outermost points, through which the alpha shape's boundary runs, are
+// kept as they are, and an empty circle of radius > alpha >= 2 c, which is what removes faces
+// from the shape, is still bounded by them. The outline, holes and pieces come out
 // as without thinning up to a fraction of a cell (tested: areas within 0.3 %), with far fewer
 // sites (a 1 m^2 plane sampled every 5 mm: 40,000 points, about 1,600 + 300 sites at alpha
 // 5 cm). Every input point keeps its piece: a thinned point belongs to a site of its cell.
@@ -42,10 +43,10 @@
 // the alpha shape keeps its pieces: measured against the unthinned alpha shape. On the benchmark
 // frame's 12 hulls (alpha 5 cm, grid 5 mm) 25 % fewer sites (5,945 -> 4,485), the same pieces
 // and holes, the same points in every largest piece (one point of a small second piece joins
-// it), the largest pieces' areas within 0.54 % of the unthinned ones
-// (all corners: 0.54 %), their sum 0.025 % above it (all corners: 0.044 % below); tested on
-// synthetic shapes against the unthinned shape as for thinning. Dropping every corner extreme
-// along straight runs (without the chord test) kept 4,403 sites but cut a disc's area by 0.47 %.
+// it), the largest pieces' areas within 0.54 % of the unthinned ones (all corners: 0.54 %),
+// their sum 0.025 % above it (all corners: 0.044 % below); tested on synthetic shapes against
+// the unthinned shape as for thinning. Dropping every corner extreme along straight runs
+// (without the chord test) kept 4,403 sites but cut a disc's area by 0.47 %.
 //
 // Sparse interior (ConcaveHullParams::sparse_interior, with thinning; for speed, the Voronoi
 // diagram costs about 7,500 instructions per site): interior cells whose cell coordinates are
