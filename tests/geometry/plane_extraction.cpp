@@ -762,3 +762,38 @@ TEST_CASE("PlaneExtractor stops on small clusters and rejects bad input", "[geom
   CHECK_THROWS_WITH(PlaneExtractor{wrong},
                     "rangenav: PlaneExtractor: argument 'params.confidence' = 1 must be in (0, 1)");
 }
+
+TEST_CASE("PlaneExtractor goes on after a RANSAC plane made of small pieces", "[geometry]") {
+  // Ground truth: a floor z = 0 ([0, 0.5]^2, 1 cm pitch, 2,601 points) and eight coplanar
+  // patches on the plane x = 2 (0.2 m x 0.2 m each, 441 points, 0.1 m apart: separate pieces of
+  // the alpha shape), 3,528 points together. RANSAC's best plane is the patches' (more inliers
+  // than the floor), but its surface, the largest piece, has fewer than min_inliers points. The
+  // floor is still a plane of the cluster and must come out; the patches stay unassigned.
+  std::vector<Point3d> pts;
+  for (int i = 0; i <= 50; ++i)
+    for (int j = 0; j <= 50; ++j)
+      pts.emplace_back(0.01 * i, 0.01 * j, 0.0);
+  for (int k = 0; k < 8; ++k)
+    for (int i = 0; i <= 20; ++i)
+      for (int j = 0; j <= 20; ++j)
+        pts.emplace_back(2.0, 0.3 * k + 0.01 * i, 0.5 + 0.01 * j);
+  PlaneExtractionParams params;
+  params.min_inliers = 1000;
+  params.hull.alpha = 0.05;
+  for (const std::uint32_t seed : {1u, 2u, 3u}) {
+    std::mt19937 rng(seed);
+    std::vector<ExtractedPlane> planes;
+    CHECK(PlaneExtractor(params).extract(pts, rng, planes) == 1);
+    REQUIRE(planes.size() == 1);
+    const auto* floor = find_plane(planes, {0, 0, 1}, 0.0);
+    REQUIRE(floor != nullptr);
+    CHECK(floor->inliers == 51 * 51);
+    CHECK(floor->shape.area() == Approx(0.25).epsilon(0.03));
+  }
+  // With no failed hypothesis allowed, the cluster ends at the patches' plane (the old
+  // behaviour): the bound is what lets the floor through.
+  params.max_failed_hypotheses = 0;
+  std::mt19937 rng(1);
+  std::vector<ExtractedPlane> planes;
+  CHECK(PlaneExtractor(params).extract(pts, rng, planes) == 0);
+}

@@ -15,8 +15,12 @@
 // do not touch, or thin strips where the band of the plane crosses other surfaces). Only the
 // largest connected piece is taken as the surface and refitted; the other inliers stay in the
 // cluster, so a second coplanar surface becomes a plane of its own and a strip of a wall cannot
-// tilt a table top in the least-squares refit. Before the refit the pieces are groups of
-// neighbouring occupied cells of alpha / 2 (cheap); after it, the pieces of the alpha shape.
+// tilt a table top in the least-squares refit. A RANSAC plane with enough inliers whose largest
+// piece is too small (a band across strips of other surfaces, or small coplanar patches apart)
+// does not end the cluster: its inliers leave the cluster unassigned and RANSAC tries again, at
+// most `max_failed_hypotheses` times per cluster, so the other planes of the cluster are still
+// found. Before the refit the pieces are groups of neighbouring occupied cells of alpha / 2
+// (cheap); after it, the pieces of the alpha shape.
 //
 // For speed (beyond the paper, same method): RANSAC hypotheses are scored on a random subset of
 // the cluster (`evaluation_subset`) and only the best is counted on all of it; the refit before
@@ -78,6 +82,12 @@ struct PlaneExtractionParams {
   /// Beyond the paper, for speed: the final plane, its inliers and hull come from round 2 on all
   /// the points.
   std::size_t coarse_stride = 4;
+  /// A RANSAC plane whose band holds at least min_inliers points but whose surface (the largest
+  /// piece of its alpha shape) has fewer is a failed hypothesis: its band's points leave the
+  /// cluster unassigned and RANSAC tries again, at most this many times per cluster (0: the
+  /// cluster ends at the first such plane). A plane whose band holds fewer than min_inliers
+  /// points ends the cluster (no plane can be fitted any more, paper 004 §3.3).
+  std::size_t max_failed_hypotheses = 3;
   /// Alpha-shape hull of the projected inliers; the interior of the dense planes of a range
   /// camera is thinned in cells of half alpha (ConcaveHullParams::thinning).
   ConcaveHullParams hull{.thinning = 0.5};
@@ -190,6 +200,7 @@ class PlaneExtractor {
     const std::size_t min_remaining = std::max<std::size_t>(
         3, params_.min_remaining != 0 ? params_.min_remaining : params_.min_inliers);
     const std::size_t before = out.size();
+    std::size_t failed = 0;  // failed hypotheses in this cluster (max_failed_hypotheses)
     while (remaining_.size() >= min_remaining) {
       const std::optional<Plane3<double>> hypothesis = ransac(rng);
       if (!hypothesis) break;
@@ -225,7 +236,17 @@ class PlaneExtractor {
       std::vector<Polygon2<double>> pieces = hull_.compute(projected_, &piece_);
       surface = keep_front(count, [&](std::size_t k) { return piece_[k] == 0; });  // largest piece
       moments = Moments::of(remaining_.data(), surface);
-      if (pieces.empty() || surface < params_.min_inliers) break;
+      if (pieces.empty() || surface < params_.min_inliers) {
+        // The band holds no surface of min_inliers points. With fewer than that in the whole
+        // band no plane can be fitted any more (RANSAC's best has too few inliers): the cluster
+        // ends. Else the band is made of small pieces (e.g. strips of several surfaces, or
+        // coplanar patches apart) while other planes may remain: its points leave the cluster
+        // unassigned, so that RANSAC cannot draw the same plane again, and RANSAC tries again,
+        // at most max_failed_hypotheses times per cluster.
+        if (count < params_.min_inliers || failed++ >= params_.max_failed_hypotheses) break;
+        remaining_ = remaining_.subspan(count);
+        continue;
+      }
       if (const auto refit = fit_least_squares(moments, plane); refit && admissible(refit->normal))
         plane = *refit;
       if (params_.viewpoint && plane.signed_distance(*params_.viewpoint) < 0)
