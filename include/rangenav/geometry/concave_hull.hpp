@@ -136,6 +136,14 @@ class ConcaveHull {
 
   [[nodiscard]] const ConcaveHullParams& params() const { return params_; }
 
+  /// Reserves the per-point scratch for inputs of up to `points` points, so that a larger input
+  /// later does not reallocate them (copying and faulting in fresh pages; see
+  /// PlaneExtractor::reserve).
+  void reserve(std::size_t points) {
+    cell_index_.reserve(points);
+    site_of_point_.reserve(points);
+  }
+
   /// The alpha shape of the 2D points of `cloud` as simple polygons with holes (outer rings
   /// counter-clockwise, holes clockwise, open rings), largest area first. Empty when no triangle
   /// passes the alpha test (fewer than 3 distinct points, collinear points, alpha too small).

@@ -254,6 +254,7 @@ class GeometricMapper {
     const bool organized = params_.organized_clustering && params_.extraction_leaf == 0 &&
                            height > 1 && width * height == n;
     extractor_.set_viewpoint(Point3d(report.pose.translation()));
+    extractor_.reserve(n);  // a cluster holds at most the frame: no regrowth from frame to frame
     if constexpr (requires { std::span<const Point3d>(cloud.points); }) {
       if (organized) {
         // Clustered in the sensor frame (distances do not change under the rigid pose), and
