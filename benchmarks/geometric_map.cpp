@@ -313,8 +313,8 @@ void BM_keyframe_running(benchmark::State& state) {
     merged = report.merged;
   }
   state.counters["max_error_mm"] = error * 1000;
-  state.counters["registered"] = static_cast<double>(keyframes) /
-                                 static_cast<double>(std::max<std::size_t>(1, state.iterations()));
+  state.counters["registered"] =
+      static_cast<double>(keyframes) / std::max(1.0, static_cast<double>(state.iterations()));
   state.counters["planes"] = static_cast<double>(planes);
   state.counters["merged"] = static_cast<double>(merged);
   state.counters["map_shapes"] = static_cast<double>(mapper.map().size());
