@@ -215,6 +215,25 @@ FacedCloud faces_3d(std::mt19937& rng, double density, bool front_only) {
   return out;
 }
 
+/// The planar-front scene: a floor, a wall facing the sensor (6 x 3 m) and a box; the model a
+/// sparse sample with normals (what a point map keeps), the data a denser, different sample seen
+/// through the true transform `truth`.
+struct PlanarFrontScene {
+  FacedCloud model;
+  Transform3d truth;
+  std::vector<Eigen::Vector3d> data;
+};
+
+PlanarFrontScene planar_front_scene() {
+  std::mt19937 rng(5);
+  PlanarFrontScene s{
+      faces_3d(rng, 300.0, true), make_transform3(0.04, -0.05, 0.01, 0.0, 0.01, 0.05), {}};
+  const FacedCloud scene = faces_3d(rng, 600.0, true);
+  for (const auto& p : scene.points)
+    s.data.push_back(s.truth.inverse(Eigen::Isometry) * p);
+  return s;
+}
+
 }  // namespace
 
 TEST_CASE("point-to-plane solver: exact on planes, indifferent to sliding within them",
@@ -290,13 +309,10 @@ TEST_CASE("point-to-plane ICP does not slide along a planar front that fills the
   // A floor, a wall facing the sensor (6 x 3 m) and a box: the model is a sparse sample (what a
   // point map keeps), the data a denser, different sample seen through the true transform. The
   // only features along the wall are the box's sides. Ground truth: the transform of the data.
-  std::mt19937 rng(5);
-  const FacedCloud model = faces_3d(rng, 300.0, true);
-  const FacedCloud scene = faces_3d(rng, 600.0, true);
-  const Transform3d truth = make_transform3(0.04, -0.05, 0.01, 0.0, 0.01, 0.05);
-  std::vector<Eigen::Vector3d> data;
-  for (const auto& p : scene.points)
-    data.push_back(truth.inverse(Eigen::Isometry) * p);
+  const PlanarFrontScene front = planar_front_scene();
+  const FacedCloud& model = front.model;
+  const Transform3d& truth = front.truth;
+  const std::vector<Eigen::Vector3d>& data = front.data;
   const KdTree<3, double> tree(model.points);
   BasicIcp<3, double, PointToPlaneSolver<double>, DecayingDistanceRejector<double>> icp;
   icp.solver.model_normals = model.normals;
@@ -664,13 +680,10 @@ TEST_CASE("coarse-to-fine ICP: a data subset first, then all points, to the same
   // (k = n / coarse_points) until that subset converges, then on all points: the result must be the
   // truth's as closely as the all-points ICP's (both converge on the same pairs' minimum), with
   // fewer searches.
-  std::mt19937 rng(5);
-  const FacedCloud model = faces_3d(rng, 300.0, true);
-  const FacedCloud scene = faces_3d(rng, 600.0, true);
-  const Transform3d truth = make_transform3(0.04, -0.05, 0.01, 0.0, 0.01, 0.05);
-  std::vector<Eigen::Vector3d> data;
-  for (const auto& p : scene.points)
-    data.push_back(truth.inverse(Eigen::Isometry) * p);
+  const PlanarFrontScene front = planar_front_scene();
+  const FacedCloud& model = front.model;
+  const Transform3d& truth = front.truth;
+  const std::vector<Eigen::Vector3d>& data = front.data;
   const KdTree<3, double> tree(model.points);
   using PlaneIcp =
       BasicIcp<3, double, PointToPlaneSolver<double>, DecayingDistanceRejector<double>>;
