@@ -201,16 +201,23 @@ template <class Scalar>
     const Point<3, Scalar>* const last = p + row + width - 1;  // the row's last pixel
     for (std::size_t c = 0; c < width; ++c) {
       const std::size_t start = c;
-      // The run's last pixel: the previous point kept in registers, one test per pixel.
+      // The run's last pixel: one test per pixel, the previous point kept in registers. Two
+      // pixels per round, the two points alternating between two sets of registers (carried in
+      // one set, they took three register copies per pixel).
       const Point<3, Scalar>* q = p + row + c;
-      Scalar x = q->x(), y = q->y(), z = q->z();
-      for (; q != last; ++q) {
-        const Scalar nx = q[1].x(), ny = q[1].y(), nz = q[1].z();
-        const Scalar dx = nx - x, dy = ny - y, dz = nz - z;
-        if (!(dx * dx + dy * dy + dz * dz < tol_sq)) break;
-        x = nx;
-        y = ny;
-        z = nz;
+      Scalar ax = q->x(), ay = q->y(), az = q->z();
+      const auto near = [tol_sq](Scalar dx, Scalar dy, Scalar dz) {
+        return dx * dx + dy * dy + dz * dz < tol_sq;
+      };
+      while (q != last) {
+        const Scalar bx = q[1].x(), by = q[1].y(), bz = q[1].z();
+        if (!near(bx - ax, by - ay, bz - az)) break;
+        if (++q == last) break;
+        ax = q[1].x();
+        ay = q[1].y();
+        az = q[1].z();
+        if (!near(ax - bx, ay - by, az - bz)) break;
+        ++q;
       }
       c = static_cast<std::size_t>(q - p) - row;
       if (c == start && !finite(row + c)) continue;  // a lone pixel with no point

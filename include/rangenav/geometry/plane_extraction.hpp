@@ -194,14 +194,16 @@ class PlaneExtractor {
       detail::throw_invalid_argument("PlaneExtractor::extract", "cluster.size()", cluster.size(),
                                      "must fit 31 bits");
     gathered_.resize(cluster.size());
+    Point3d* const out = gathered_.data();
+    const Point3d* const in = points.data();
+    const std::size_t size = points.size();
     std::size_t kept = 0;
     for (const std::uint32_t i : cluster) {
-      if (i >= points.size())
-        detail::throw_invalid_argument(
-            "PlaneExtractor::extract", "cluster index", i,
-            "must be < points.size() = " + std::to_string(points.size()));
-      const Point3d p = map(points[i]);
-      gathered_[kept] = p;
+      if (i >= size)
+        detail::throw_invalid_argument("PlaneExtractor::extract", "cluster index", i,
+                                       "must be < points.size() = " + std::to_string(size));
+      const Point3d p = map(in[i]);
+      out[kept] = p;
       kept += std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()) ? 1 : 0;
     }
     remaining_ = std::span<Point3d>(gathered_).first(kept);
@@ -483,7 +485,7 @@ class PlaneExtractor {
   /// the front of remaining_ (a stable partition); else only every stride-th point is looked at,
   /// remaining_ is left as it is and piece_ lists the inliers' positions in it.
   /// projected_ receives the inliers in `frame`'s plane coordinates (Eq. 1-3) times `scale`, in
-  /// order.
+  /// order; only round 1 (!Move) sets their box lo_, hi_ (round 2's hull finds its own).
   template <bool Move>
   std::size_t split_inliers(const Plane3<double>& plane, const PlaneFrame<double>& frame,
                             double scale, std::size_t stride = 1) {
@@ -494,7 +496,10 @@ class PlaneExtractor {
     // the benchmark's fresh mapper per frame and fault it in again (perf stat -e page-faults over
     // a BM_keyframe_total run: 19k -> 103k, about +3 ms per key frame).
     if (others_.size() < n) others_.resize(n);
-    if (!Move && piece_.size() < n) piece_.resize(n);
+    // Round 1 lists at most ceil(n / stride) positions: piece_ (which the hull shrinks to round
+    // 2's count) grows to that only, not to n (its growth is a memset).
+    const std::size_t listed = Move ? 0 : (n + stride - 1) / stride;
+    if (!Move && piece_.size() < listed) piece_.resize(listed);
     projected_.resize(n);
     // Stable partition with a branch on the inlier test: each point is written once, to its side
     // (inliers with their plane coordinates). The points come in image order, so the test
@@ -514,13 +519,15 @@ class PlaneExtractor {
     // (R.topRows<2>() * p + offset) * scale, so the same bits.
     const double nx = plane.normal.x(), ny = plane.normal.y(), nz = plane.normal.z();
     const double d = plane.d;
+    const Eigen::Array2d nxy(nx, ny);
     // frame.to_plane's first two rows, inlined: x_plane = R (x - o), Eq. (10).
     const Eigen::Matrix<double, 2, 3> rows = frame.world_to_plane.linear().topRows<2>();
     const Point2d c0 = rows.col(0), c1 = rows.col(1), c2 = rows.col(2);
     const Point2d o = frame.world_to_plane.translation().head<2>();
     for (std::size_t k = 0; k < n; k += Move ? 1 : stride) {
       const double x = in[k].x(), y = in[k].y(), z = in[k].z();
-      const double delta = nx * x + ny * y + nz * z + d;  // Eq. (2)
+      const Eigen::Array2d nxy_xy = nxy * in[k].head<2>().array();  // (nx x, ny y) in one product
+      const double delta = nxy_xy.x() + nxy_xy.y() + nz * z + d;    // Eq. (2)
       if (std::abs(delta) < thr) {
         if constexpr (Move) {
           double* const a = in[count].data();
@@ -540,9 +547,18 @@ class PlaneExtractor {
         ++other;
       }
     }
-    // The box of the inliers, in a pass of its own over them (in the loop above it became a
-    // branch on the inlier test), with four boxes in flight: one min and max chain waited on
-    // the latency of each minpd / maxpd (a fifth of this function's time).
+    if constexpr (Move) std::copy(out, out + other, in + count);
+    projected_.resize(count);
+    if constexpr (!Move) box(count);
+    return count;
+  }
+
+  /// lo_, hi_: the box of projected_[0 .. count), for largest_cell_piece. In a pass of its own
+  /// over the inliers (in split_inliers' loop it became a branch on the inlier test), with four
+  /// boxes in flight: one min and max chain waited on the latency of each minpd / maxpd (a fifth
+  /// of split_inliers' time).
+  void box(std::size_t count) {
+    const Point2d* const proj = projected_.data();
     constexpr std::size_t lanes = 4;
     std::array<Point2d, lanes> lo, hi;
     lo.fill(Point2d::Constant(std::numeric_limits<double>::max()));
@@ -561,11 +577,8 @@ class PlaneExtractor {
       lo[0] = lo[0].cwiseMin(lo[j]);
       hi[0] = hi[0].cwiseMax(hi[j]);
     }
-    if constexpr (Move) std::copy(out, out + other, in + count);
-    projected_.resize(count);
     lo_ = lo[0];
     hi_ = hi[0];
-    return count;
   }
 
   /// Appends the surface whose points' moments are `m`, on `plane`, its hull `polygon` given in
