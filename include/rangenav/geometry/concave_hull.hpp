@@ -170,8 +170,8 @@ class ConcaveHull {
     Eigen::Array2d hi = -lo, nan = Eigen::Array2d::Zero();  // x and y side by side
     for (std::size_t i = 0; i < n; ++i) {
       const Eigen::Array2d p = traits::point(cloud, i).template cast<double>().array();
-      lo = lo.min(p);
-      hi = hi.max(p);
+      lo = p.min(lo);  // min and max in place (Eigen's operand order)
+      hi = p.max(hi);
       nan += p - p;  // stays 0 unless p is NaN or infinite (min and max may skip a NaN)
     }
     lo *= inv;
@@ -629,10 +629,20 @@ class ConcaveHull {
     auto lo = std::lower_bound(boundary_.begin(), boundary_.end(), DirectedEdge{v, 0});
     std::size_t best = npos;
     double best_angle = 0;
+    auto end = lo;  // the edges leaving v; with one unused, no angle is needed
+    std::size_t unused = 0;
+    for (; end != boundary_.end() && end->from == v; ++end)
+      unused += used_[static_cast<std::size_t>(end - boundary_.begin())] ? 0 : 1;
+    if (unused <= 1) {
+      for (auto it = lo; it != end; ++it)
+        if (!used_[static_cast<std::size_t>(it - boundary_.begin())])
+          return static_cast<std::size_t>(it - boundary_.begin());
+      return npos;
+    }
     const cell_type& pv = sites_[v];
     const cell_type& pu = sites_[boundary_[cur].from];
     const double back = std::atan2(double(pu[1] - pv[1]), double(pu[0] - pv[0]));
-    for (auto it = lo; it != boundary_.end() && it->from == v; ++it) {
+    for (auto it = lo; it != end; ++it) {
       const auto k = static_cast<std::size_t>(it - boundary_.begin());
       if (used_[k]) continue;
       const cell_type& pw = sites_[it->to];
