@@ -187,8 +187,10 @@ class ConcaveHull {
       hi_ = {round_half_away(hi.x()), round_half_away(hi.y())};
     }
     const auto snap = [&cloud, inv](std::size_t i) -> cell_type {
-      const Point2d p = traits::point(cloud, i).template cast<double>();
-      return {round_half_away(p.x() * inv), round_half_away(p.y() * inv)};
+      // The coordinates read one by one: a copy of the point went through the stack.
+      const auto& p = traits::point(cloud, i);
+      return {round_half_away(static_cast<double>(p.x()) * inv),
+              round_half_away(static_cast<double>(p.y()) * inv)};
     };
     select_sites(n, snap);
     auto result = build(n, grid);
@@ -314,12 +316,15 @@ class ConcaveHull {
       if (head == none) first_seen[count++] = static_cast<std::uint32_t>(c);
     };
     if (by_table) {
+      const cell_type origin{gx0, gy0};
       const std::uint32_t* const columns = column_of_.data();
       const std::uint32_t* const rows = row_of_.data();
       for (std::size_t i = 0; i < n; ++i) {
         const cell_type g = snap(i);
-        bin(i, std::size_t(rows[static_cast<std::size_t>(g[1] - gy0)]) +
-                   columns[static_cast<std::size_t>(g[0] - gx0)]);
+        std::array<std::uint32_t, 2> o;  // offsets into the tables, taken as a pair (in SIMD)
+        for (std::size_t a = 0; a < 2; ++a)
+          o[a] = static_cast<std::uint32_t>(g[a] - origin[a]);
+        bin(i, std::size_t(rows[o[1]]) + columns[o[0]]);
       }
     } else {
       for (std::size_t i = 0; i < n; ++i) {
