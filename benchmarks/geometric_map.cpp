@@ -16,6 +16,7 @@
 // same threshold, minimum inliers and alpha (without clustering).
 
 #include <benchmark/benchmark.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <cmath>
@@ -50,6 +51,13 @@
 namespace {
 
 using namespace rangenav;
+
+/// Minor page faults of the process so far (first touches of newly mapped memory).
+long minor_faults() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_minflt;
+}
 
 struct Frames {
   Cloud3d first, second;
@@ -257,6 +265,7 @@ void BM_keyframe_total(benchmark::State& state) {
   const auto p = params(0);
   std::size_t planes = 0, merged = 0;
   double error = 0;
+  long faults = 0;
   // The mapper and the report of an iteration are destroyed in the next one's paused part: their
   // destruction (freeing the maps and the buffers, 2-3 ms) is no part of processing a key frame.
   std::optional<GeometricMapper> mapper;
@@ -269,7 +278,9 @@ void BM_keyframe_total(benchmark::State& state) {
     std::mt19937 rng(7);
     mapper->process(f.first, f.first_pose, rng);
     state.ResumeTiming();
+    const long faults_before = minor_faults();
     report.emplace(mapper->process(f.second, f.second_guess, rng));
+    faults += minor_faults() - faults_before;
     benchmark::DoNotOptimize(report->pose);
     error = (f.second_pose.inverse() * report->pose).translation().norm();
     planes = report->planes.size();
@@ -278,6 +289,8 @@ void BM_keyframe_total(benchmark::State& state) {
   state.counters["error_mm"] = error * 1000;
   state.counters["planes"] = static_cast<double>(planes);
   state.counters["merged"] = static_cast<double>(merged);
+  state.counters["faults"] =
+      benchmark::Counter(static_cast<double>(faults), benchmark::Counter::kAvgIterations);
 }
 BENCHMARK(BM_keyframe_total)->Unit(benchmark::kMillisecond);
 
@@ -286,8 +299,8 @@ BENCHMARK(BM_keyframe_total)->Unit(benchmark::kMillisecond);
 /// point map and geometric map hold the earlier key frames and its buffers have their working size,
 /// as for every key frame after the first few. Only the key frames at the second pose are timed.
 /// BM_keyframe_total's fresh mapper also pays, in the timed frame, the page faults of its buffers'
-/// first growth (about 2,200-2,900 per frame, measured with getrusage; none once the buffers have
-/// grown).
+/// first growth (its `faults` counter: minor faults of the timed frame, from getrusage; about
+/// 2,200 more per iteration fall in its paused part), none once the buffers have grown.
 void BM_keyframe_running(benchmark::State& state) {
   const Frames& f = frames();
   GeometricMapper mapper(params(0));

@@ -85,6 +85,23 @@ TEST_CASE("voxel_downsample equals the brute-force centroids of its cells", "[ma
   frame.insert(frame.begin() + 200, Eigen::Vector3d(0, inf, 0));
   frame.emplace_back(1e6, 0, 0);  // cell 4e6: beyond 2^20, skipped
   frame.emplace_back(-1e6, 0, 0);
+  // Runs that step across cell faces by one ulp: c * leaf and its neighbouring doubles, where
+  // the rounding of p / leaf decides the cell (the filter tests cell bounds, not floor(p / leaf)).
+  std::vector<Eigen::Vector3d> faces;
+  for (const double leaf : {0.05, 0.013, 0.1, 0.3})
+    for (int c = -40; c <= 40; ++c)
+      for (int axis = 0; axis < 3; ++axis) {
+        const double x = c * leaf;
+        for (const double v :
+             {std::nextafter(std::nextafter(x, -1e9), -1e9), std::nextafter(x, -1e9), x,
+              std::nextafter(x, 1e9), std::nextafter(std::nextafter(x, 1e9), 1e9)}) {
+          Eigen::Vector3d p(0.0101, -0.0203, 0.0307);
+          p[axis] = v;
+          faces.push_back(p);
+        }
+      }
+  for (const double leaf : {0.05, 0.013, 0.1, 0.3})
+    CHECK(voxel_downsample(faces, leaf) == reference_voxels<3>(faces, leaf));
   for (const double leaf : {0.05, 0.25, 0.013}) {
     const auto out = voxel_downsample(frame, leaf);
     CHECK(out == reference_voxels<3>(frame, leaf));

@@ -68,6 +68,16 @@
 // may be boundary cells (their sites can be anywhere in them) breaks the first step: removing
 // every odd cell whose 3 x 3 block is occupied made that test fail. On the benchmark frame this
 // rule keeps 416 sites fewer than requiring the 5 x 5 block of every removed cell.
+// Sparser interiors that the same argument allows were measured (session 8) and not kept: the
+// proof only needs every point near a removed centre within some rho < alpha of a site, so a
+// deep region may use the lattice spanned by (3, 0) and (1, 3) cells (acute Delaunay triangles,
+// circumradius 1.90 c < 2 c; 1 site per 9 cells instead of 4) where every lattice cell within
+// 3.8 c is interior; but the planes of the benchmark's two key frames are too small for deep
+// regions (their 30 hulls' 16,453 interior cells: 10,442 sites removed against 10,366, for
+// 4.4 M instructions of bookkeeping). Letting an odd cell lean on one axis neighbour or two
+// diagonals (every point within 1.80 c of a site) needs its 5 x 5 block (less the corners)
+// occupied: alone it removed fewer sites (9,833) than the rule above, added to it (where no cell of
+// the 3 x 3 block was removed by the rule above, which the rule above's proof needs) none.
 
 #include <boost/geometry/algorithms/within.hpp>
 #include <boost/geometry/geometries/point_xy.hpp>
@@ -77,10 +87,12 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <span>
 #include <string>
@@ -140,8 +152,9 @@ class ConcaveHull {
   /// later does not reallocate them (copying and faulting in fresh pages; see
   /// PlaneExtractor::reserve).
   void reserve(std::size_t points) {
-    cell_index_.reserve(points);
-    site_of_point_.reserve(points);
+    (void)cell_index_.get(points);
+    (void)next_in_cell_.get(points);
+    (void)site_of_point_.get(points);
   }
 
   /// The alpha shape of the 2D points of `cloud` as simple polygons with holes (outer rings
@@ -161,15 +174,18 @@ class ConcaveHull {
     // The box of the scaled coordinates, and whether every point is finite and fits the grid;
     // a point snaps to round_half_away of its scaled coordinates, which is monotonic, so the
     // box's corners snap to the box of the grid points. Points are snapped again where needed
-    // (select_sites), none is stored.
+    // (select_sites), none is stored. The box is taken of the coordinates and scaled after:
+    // a product by inv > 0 is monotonic too, so that is the box of the scaled coordinates.
     Eigen::Array2d lo = Eigen::Array2d::Constant(std::numeric_limits<double>::infinity());
     Eigen::Array2d hi = -lo, nan = Eigen::Array2d::Zero();  // x and y side by side
     for (std::size_t i = 0; i < n; ++i) {
-      const Eigen::Array2d g = traits::point(cloud, i).template cast<double>().array() * inv;
-      lo = lo.min(g);
-      hi = hi.max(g);
-      nan += g - g;  // stays 0 unless g is NaN or infinite (min and max may skip a NaN)
+      const Eigen::Array2d p = traits::point(cloud, i).template cast<double>().array();
+      lo = p.min(lo);  // min and max in place (Eigen's operand order)
+      hi = p.max(hi);
+      nan += p - p;  // stays 0 unless p is NaN or infinite (min and max may skip a NaN)
     }
+    lo *= inv;
+    hi *= inv;
     const bool fits = (nan == 0).all() && (lo.abs() <= IntegerGrid::limit).all() &&
                       (hi.abs() <= IntegerGrid::limit).all();
     if (!fits)  // NaN or out of range: the first such point, named by the grid in its message
@@ -181,8 +197,10 @@ class ConcaveHull {
       hi_ = {round_half_away(hi.x()), round_half_away(hi.y())};
     }
     const auto snap = [&cloud, inv](std::size_t i) -> cell_type {
-      const Point2d p = traits::point(cloud, i).template cast<double>();
-      return {round_half_away(p.x() * inv), round_half_away(p.y() * inv)};
+      // The coordinates read one by one: a copy of the point went through the stack.
+      const auto& p = traits::point(cloud, i);
+      return {round_half_away(static_cast<double>(p.x()) * inv),
+              round_half_away(static_cast<double>(p.y()) * inv)};
     };
     select_sites(n, snap);
     auto result = build(n, grid);
@@ -260,8 +278,8 @@ class ConcaveHull {
     constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
     const auto uw = static_cast<std::size_t>(w);
     thinned_ = true;
-    cell_slot_.assign(static_cast<std::size_t>(w * h), none);  // first point, then slot
-    cell_index_.resize(n);
+    cell_slot_.assign(static_cast<std::size_t>(w * h), none);  // a point, then slot
+
     // The cell of every point. Where the box is not much wider than the input is large, by
     // tables of the cell column and row offset of every grid coordinate in it, filled by
     // walking the coordinates (a cell starts every k steps), which costs less than cell_of
@@ -292,24 +310,31 @@ class ConcaveHull {
     // reloaded from memory for every point.
     const std::size_t most = std::min(n, static_cast<std::size_t>(w * h));
     if (occupied_.size() < most) occupied_.resize(most);  // never shrunk: no refill per call
+    // Every cell's points form a list through next_in_cell_, last point first: cell_slot_ holds
+    // its head (the cell's last point), so that the pass over the boundary cells' points below
+    // walks their lists and skips the interior points without looking at them.
     std::uint32_t* const slots = cell_slot_.data();
-    std::uint32_t* const cells = cell_index_.data();
+    std::uint32_t* const cells = cell_index_.get(n);
+    std::uint32_t* const chain = next_in_cell_.get(n);
     std::uint32_t* const first_seen = occupied_.data();
     std::size_t count = 0;
     const auto bin = [&](std::size_t i, std::size_t c) {
       cells[i] = static_cast<std::uint32_t>(c);
-      if (slots[c] == none) {
-        slots[c] = static_cast<std::uint32_t>(i);
-        first_seen[count++] = static_cast<std::uint32_t>(c);
-      }
+      const std::uint32_t head = slots[c];
+      chain[i] = head;
+      slots[c] = static_cast<std::uint32_t>(i);
+      if (head == none) first_seen[count++] = static_cast<std::uint32_t>(c);
     };
     if (by_table) {
+      const cell_type origin{gx0, gy0};
       const std::uint32_t* const columns = column_of_.data();
       const std::uint32_t* const rows = row_of_.data();
       for (std::size_t i = 0; i < n; ++i) {
         const cell_type g = snap(i);
-        bin(i, std::size_t(rows[static_cast<std::size_t>(g[1] - gy0)]) +
-                   columns[static_cast<std::size_t>(g[0] - gx0)]);
+        std::array<std::uint32_t, 2> o;  // offsets into the tables, taken as a pair (in SIMD)
+        for (std::size_t a = 0; a < 2; ++a)
+          o[a] = static_cast<std::uint32_t>(g[a] - origin[a]);
+        bin(i, std::size_t(rows[o[1]]) + columns[o[0]]);
       }
     } else {
       for (std::size_t i = 0; i < n; ++i) {
@@ -326,10 +351,11 @@ class ConcaveHull {
       return static_cast<std::ptrdiff_t>(d[1]) * static_cast<std::ptrdiff_t>(uw) + d[0];
     };
     // Pass over the occupied cells: the mask of empty neighbours, and for boundary cells a block
-    // of 8 extreme slots. cell_slot_ then holds the cell's first point for interior cells, and
-    // 'none - 1 - block' for boundary cells.
+    // of 8 extreme slots. cell_slot_ then holds a point of the cell (the head of its list) for
+    // interior cells, and 'none - 1 - block' for boundary cells (block_head_ the head).
     mask_.clear();
     block_cell_.clear();
+    block_head_.clear();
     extreme_.clear();
     for (const std::uint32_t c : occupied()) {
       std::uint8_t mask = 0;
@@ -342,6 +368,7 @@ class ConcaveHull {
       const auto block = static_cast<std::uint32_t>(mask_.size());
       mask_.push_back(mask);
       block_cell_.push_back(c);
+      block_head_.push_back(cell_slot_[c]);
       extreme_.insert(extreme_.end(), dir.size(), none);
       cell_slot_[c] = none - 1 - block;
     }
@@ -349,7 +376,7 @@ class ConcaveHull {
     const std::uint32_t boundary_tag = none - 1 - static_cast<std::uint32_t>(mask_.size());
     boundary_tag_ = boundary_tag;
     if (params_.sparse_interior) sparsen_interior(uw, x0, y0);
-    // Interior cells that keep a site: one at the cell's centre, named by the cell's first point.
+    // Interior cells that keep a site: one at the cell's centre, named by a point of the cell.
     keyed_.clear();
     for (const std::uint32_t c : occupied()) {
       const std::uint32_t slot = cell_slot_[c];
@@ -360,26 +387,29 @@ class ConcaveHull {
                                   static_cast<std::int32_t>(cy * k + k / 2)},
                         slot});
     }
-    // The extremes of the boundary cells, in a pass over the points that skips the interior
-    // ones; a boundary point is snapped again (the same grid point), a slot keeps its extreme's.
+    // The extremes of the boundary cells, by walking their lists of points (the interior points
+    // are not visited); a boundary point is snapped again (the same grid point), a slot keeps its
+    // extreme's. A list runs from the last point to the first, and a point at least as far as
+    // the best so far replaces it: of several farthest points, the first one is the extreme.
+    // How far a point is towards dir[d] is its projection on dir[d], compared as integers.
     extreme_at_.resize(extreme_.size());
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t slot = slots[cells[i]];
-      if (slot <= boundary_tag) continue;  // interior
-      const std::uint32_t block = none - 1 - slot;
-      const std::uint8_t mask = mask_[block];
-      const cell_type g = snap(i);
-      for (std::size_t d = 0; d < dir.size(); ++d) {
-        if (!(mask & (1u << d))) continue;
-        std::uint32_t& best = extreme_[block * dir.size() + d];
-        cell_type& b = extreme_at_[block * dir.size() + d];
-        if (best != none) {
-          const std::int64_t gain = std::int64_t(dir[d][0]) * (std::int64_t(g[0]) - b[0]) +
-                                    std::int64_t(dir[d][1]) * (std::int64_t(g[1]) - b[1]);
-          if (gain <= 0) continue;
+    for (std::size_t block = 0; block < mask_.size(); ++block) {
+      const unsigned mask = mask_[block];
+      std::uint32_t* const best = extreme_.data() + block * dir.size();
+      cell_type* const at = extreme_at_.data() + block * dir.size();
+      std::array<std::int64_t, 8> farthest;
+      farthest.fill(std::numeric_limits<std::int64_t>::min());
+      for (std::uint32_t i = block_head_[block]; i != none; i = chain[i]) {
+        const cell_type g = snap(i);
+        const std::int64_t x = g[0], y = g[1];
+        const std::array<std::int64_t, 8> towards{-x - y, -y, x - y, -x, x, y - x, y, x + y};
+        for (unsigned m = mask; m != 0; m &= m - 1) {
+          const auto d = static_cast<std::size_t>(std::countr_zero(m));
+          if (towards[d] < farthest[d]) continue;
+          farthest[d] = towards[d];
+          best[d] = i;
+          at[d] = g;
         }
-        best = static_cast<std::uint32_t>(i);
-        b = g;
       }
     }
     // The extremes are the boundary sites (all_corners = false: a corner extreme along a straight
@@ -460,10 +490,10 @@ class ConcaveHull {
     // thinning) to their sites.
     std::sort(keyed_.begin(), keyed_.end());
     sites_.clear();
-    site_of_point_.resize(n);
+    std::uint32_t* const site_of_point = site_of_point_.get(n);
     for (const auto& [cell, index] : keyed_) {
       if (sites_.empty() || sites_.back() != cell) sites_.push_back(cell);
-      site_of_point_[index] = static_cast<std::uint32_t>(sites_.size() - 1);
+      site_of_point[index] = static_cast<std::uint32_t>(sites_.size() - 1);
     }
     parent_.resize(sites_.size());
     for (std::size_t i = 0; i < parent_.size(); ++i)
@@ -614,10 +644,20 @@ class ConcaveHull {
     auto lo = std::lower_bound(boundary_.begin(), boundary_.end(), DirectedEdge{v, 0});
     std::size_t best = npos;
     double best_angle = 0;
+    auto end = lo;  // the edges leaving v; with one unused, no angle is needed
+    std::size_t unused = 0;
+    for (; end != boundary_.end() && end->from == v; ++end)
+      unused += used_[static_cast<std::size_t>(end - boundary_.begin())] ? 0 : 1;
+    if (unused <= 1) {
+      for (auto it = lo; it != end; ++it)
+        if (!used_[static_cast<std::size_t>(it - boundary_.begin())])
+          return static_cast<std::size_t>(it - boundary_.begin());
+      return npos;
+    }
     const cell_type& pv = sites_[v];
     const cell_type& pu = sites_[boundary_[cur].from];
     const double back = std::atan2(double(pu[1] - pv[1]), double(pu[0] - pv[0]));
-    for (auto it = lo; it != boundary_.end() && it->from == v; ++it) {
+    for (auto it = lo; it != end; ++it) {
       const auto k = static_cast<std::size_t>(it - boundary_.begin());
       if (used_[k]) continue;
       const cell_type& pw = sites_[it->to];
@@ -671,7 +711,27 @@ class ConcaveHull {
   std::vector<std::uint32_t> block_cell_;  // per boundary cell: its cell
   std::vector<std::uint32_t> extreme_;     // per boundary cell: 8 extreme points
   std::vector<cell_type> extreme_at_;      // their grid points
-  std::vector<std::uint32_t> cell_index_;  // per input point: its thinning cell
+  /// A per-point scratch array that grows without initialising its elements (a std::vector's
+  /// resize would zero every element beyond its size, for each larger input again).
+  class Scratch {
+   public:
+    std::uint32_t* get(std::size_t n) {
+      if (n > capacity_) {
+        data_ = std::make_unique_for_overwrite<std::uint32_t[]>(n);
+        capacity_ = n;
+      }
+      return data_.get();
+    }
+    [[nodiscard]] std::uint32_t* data() const { return data_.get(); }
+    std::uint32_t& operator[](std::size_t i) { return data_[i]; }
+
+   private:
+    std::unique_ptr<std::uint32_t[]> data_;
+    std::size_t capacity_ = 0;
+  };
+  std::vector<std::uint32_t> block_head_;  // per boundary cell: the head of its list of points
+  Scratch cell_index_;                     // per input point: its thinning cell
+  Scratch next_in_cell_;                   // per input point: the previous point of its cell
   std::vector<std::uint32_t> column_of_;   // per grid x in the box: its cell column + 1
   std::vector<std::uint32_t> row_of_;      // per grid y in the box: (its cell row + 1) * width
   std::vector<std::uint32_t> occupied_;    // the occupied thinning cells, in the order of their
@@ -681,7 +741,7 @@ class ConcaveHull {
   }
   std::vector<std::pair<cell_type, std::uint32_t>> keyed_;  // site grid point, input index
   std::vector<cell_type> sites_;
-  std::vector<std::uint32_t> site_of_point_;
+  Scratch site_of_point_;                    // per point of keyed_: its site
   std::vector<std::uint32_t> parent_;        // union-find over sites
   std::vector<std::int32_t> piece_of_root_;  // union-find root -> polygon index or -1
   std::vector<std::int32_t> piece_of_site_;  // site -> polygon index or -1

@@ -4,6 +4,7 @@
 // replaced by their centroid. Deterministic output ordered by voxel key.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -26,22 +27,47 @@ template <PointCloud C>
                                                              traits::scalar_t<C> leaf_size) {
   using Scalar = traits::scalar_t<C>;
   constexpr int D = traits::dimension_v<C>;
+  using Point = cloud_point_t<C>;
+  constexpr std::size_t Dim = D;
+  using Coords = std::array<Scalar, Dim>;  // (std::array: registers, where Eigen's spill)
   detail::require_positive("voxel_downsample", "leaf_size", leaf_size);
   const std::size_t n = traits::size(cloud);
   constexpr std::int64_t half = std::int64_t(1) << 20;
-  // One accumulator per occupied voxel, found by its key. Consecutive points (the pixels
-  // along a row of an organised frame) mostly share a voxel: while a point falls into the
-  // current voxel's cell (a comparison with its bounds, no key computed), it is summed in
-  // registers; on a change the voxel's slot is looked up in a small direct-mapped cache of
-  // keys, then in the hash map. The points of a voxel are summed in input order and the
-  // voxels sorted by key, which keeps the output deterministic (ordered by voxel).
-  using Point = cloud_point_t<C>;
+  const Scalar inv = Scalar(1) / leaf_size;
+  // A point p lies in the cell c = floor(p * inv) (per axis). p * inv rounds monotonically in
+  // p, so the cell is an interval of coordinates: [first(c), first(c + 1)) with first(c) the
+  // smallest x whose product x * inv is >= c. Each voxel keeps those bounds (a few ulp steps
+  // from c * leaf_size, found once per voxel), and the test "same voxel as before" that every
+  // point takes is six comparisons, no product, with the same outcome as comparing
+  // floor(p * inv) (tested against that definition).
+  const auto first = [inv, leaf_size](Scalar c) {
+    constexpr Scalar inf = std::numeric_limits<Scalar>::infinity();
+    Scalar x = c * leaf_size;
+    if (x * inv >= c) {
+      for (Scalar below = std::nextafter(x, -inf); below * inv >= c;
+           below = std::nextafter(below, -inf))
+        x = below;
+    } else {
+      do
+        x = std::nextafter(x, inf);
+      while (x * inv < c);
+    }
+    return x;
+  };
+  // One accumulator per occupied voxel. Consecutive points (the pixels along a row of an
+  // organised frame) mostly share a voxel: they are summed in registers while they fall into
+  // the voxel's bounds. On a change, the voxel before the current one is tried (a surface
+  // that runs along a voxel face alternates between the two in the range noise), then the
+  // point's key is looked up in a small direct-mapped cache of keys, then in the hash map. The
+  // points of a voxel are summed in input order and the voxels sorted by key, which keeps the
+  // output deterministic (ordered by voxel).
   struct Voxel {
-    std::uint64_t key;
-    Point sum;
+    Coords sum;
     std::size_t count;
+    Coords lower, upper;  // the cell: lower <= p < upper per axis
   };
   std::vector<Voxel> voxels;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keys;  // (key, voxel), to sort
   std::unordered_map<std::uint64_t, std::uint32_t> slot_of;
   constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
   constexpr int cache_bits = 10;
@@ -50,66 +76,91 @@ template <PointCloud C>
     std::uint32_t slot = std::numeric_limits<std::uint32_t>::max();  // empty
   };
   std::vector<CacheEntry> cache(std::size_t(1) << cache_bits);
-  std::uint32_t slot = none;      // the current voxel
-  Point run_sum = Point::Zero();  // voxels[slot].sum, being summed
-  std::size_t run_count = 0;
-  Point cell_min = Point::Zero(), cell_max = Point::Zero();  // its cell, in units of leaf_size
-  const Scalar inv = Scalar(1) / leaf_size;
+  const auto contains = [](const Voxel& v, const Coords& p) {
+    unsigned in = 1;  // bitwise, without branches
+    for (std::size_t d = 0; d < Dim; ++d)
+      in &= static_cast<unsigned>(p[d] >= v.lower[d]) & static_cast<unsigned>(p[d] < v.upper[d]);
+    return in != 0;
+  };
+  const auto load = [&cloud](std::size_t k, Coords& p) {
+    const auto& q = traits::point(cloud, k);
+    for (std::size_t d = 0; d < Dim; ++d)
+      p[d] = q[static_cast<Eigen::Index>(d)];
+  };
   // floor(p * inv) must lie in (-half, half - 1), i.e. p * inv in [1 - half, half - 1); NaN
   // and infinite coordinates fail the test as well.
   const Scalar lowest = Scalar(1 - half), highest = Scalar(half - 1);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Point p = traits::point(cloud, i);
-    const Point t = p * inv;
-    // t in [cell_min, cell_max) <=> floor(t) == cell_min (the bounds are whole numbers).
-    // (Bitwise, without branches: the test is taken for every point.)
-    unsigned same = slot != none ? 1u : 0u;
-    for (int d = 0; d < D; ++d)
-      same &=
-          static_cast<unsigned>(t[d] >= cell_min[d]) & static_cast<unsigned>(t[d] < cell_max[d]);
-    if (same == 0) {
+  std::uint32_t current = none, before = none;
+  Coords p;
+  for (std::size_t i = 0; i < n;) {
+    load(i, p);
+    std::uint32_t slot = before;
+    if (slot == none || !contains(voxels[slot], p)) {
       std::uint64_t key = 0;
       bool inside = true;
-      Point cell;
-      for (int d = 0; d < D; ++d) {
-        inside = inside && t[d] >= lowest && t[d] < highest;
+      Coords cell;
+      for (std::size_t d = 0; d < Dim; ++d) {
+        const Scalar t = p[d] * inv;
+        inside = inside && t >= lowest && t < highest;
         // floor(t) without a libm call: truncate, then step down for negative fractions.
-        auto c = static_cast<std::int64_t>(inside ? t[d] : Scalar(0));
-        c -= static_cast<std::int64_t>(t[d] < static_cast<Scalar>(c));
+        auto c = static_cast<std::int64_t>(inside ? t : Scalar(0));
+        c -= static_cast<std::int64_t>(t < static_cast<Scalar>(c));
         cell[d] = static_cast<Scalar>(c);
         key = (key << 21) | static_cast<std::uint64_t>(c + half);
       }
-      if (!inside) continue;
-      if (slot != none) {
-        voxels[slot].sum = run_sum;
-        voxels[slot].count = run_count;
+      if (!inside) {
+        ++i;
+        continue;
       }
       CacheEntry& entry = cache[(key * 0x9E3779B97F4A7C15ull) >> (64 - cache_bits)];
       if (entry.slot == none || entry.key != key) {
         const auto [it, fresh] =
             slot_of.try_emplace(key, static_cast<std::uint32_t>(voxels.size()));
-        if (fresh) voxels.push_back({key, Point::Zero(), 0});
+        if (fresh) {
+          Voxel v{};
+          for (std::size_t d = 0; d < Dim; ++d) {
+            v.lower[d] = first(cell[d]);
+            v.upper[d] = first(cell[d] + 1);
+          }
+          voxels.push_back(v);
+          keys.emplace_back(key, it->second);
+        }
         entry = {key, it->second};
       }
       slot = entry.slot;
-      run_sum = voxels[slot].sum;
-      run_count = voxels[slot].count;
-      cell_min = cell;
-      cell_max = cell + Point::Ones();
     }
-    run_sum += p;
-    ++run_count;
+    // The run of points in this voxel, summed in registers.
+    Voxel& v = voxels[slot];
+    const Coords lower = v.lower, upper = v.upper;
+    Coords sum = v.sum;
+    for (std::size_t d = 0; d < Dim; ++d)
+      sum[d] += p[d];
+    std::size_t j = i + 1;
+    for (; j < n; ++j) {
+      Coords q;
+      load(j, q);
+      unsigned in = 1;
+      for (std::size_t d = 0; d < Dim; ++d)
+        in &= static_cast<unsigned>(q[d] >= lower[d]) & static_cast<unsigned>(q[d] < upper[d]);
+      if (in == 0) break;
+      for (std::size_t d = 0; d < Dim; ++d)
+        sum[d] += q[d];
+    }
+    v.sum = sum;
+    v.count += j - i;
+    before = slot == current ? before : current;
+    current = slot;
+    i = j;
   }
-  if (slot != none) {
-    voxels[slot].sum = run_sum;
-    voxels[slot].count = run_count;
+  std::sort(keys.begin(), keys.end());
+  std::vector<Point> out;
+  out.reserve(keys.size());
+  for (const auto& [key, slot] : keys) {
+    Point sum;
+    for (std::size_t d = 0; d < Dim; ++d)
+      sum[static_cast<Eigen::Index>(d)] = voxels[slot].sum[d];
+    out.push_back(sum / static_cast<Scalar>(voxels[slot].count));
   }
-  std::sort(voxels.begin(), voxels.end(),
-            [](const Voxel& a, const Voxel& b) { return a.key < b.key; });
-  std::vector<cloud_point_t<C>> out;
-  out.reserve(voxels.size());
-  for (const Voxel& v : voxels)
-    out.push_back(v.sum / static_cast<Scalar>(v.count));
   return out;
 }
 
