@@ -208,8 +208,9 @@ class SparsePointMap {
       for (const auto& nb : neighbors_)
         mark(nb.index, i, nb.distance_sq);
       if (neighbors_.size() >= k) {
-        std::partial_sort(neighbors_.begin(), neighbors_.begin() + static_cast<std::ptrdiff_t>(k),
-                          neighbors_.end(), closer);
+        // A total order (ties by index): the k first are those of a partial sort; a full sort
+        // of the dozen or so near points is cheaper.
+        std::sort(neighbors_.begin(), neighbors_.end(), closer);
         neighbors_.resize(k);
       } else {
         tree_.knn(q, k, neighbors_, radius_sq);
