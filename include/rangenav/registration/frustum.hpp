@@ -120,14 +120,15 @@ struct FrustumRejector {
               std::vector<Correspondence<D, Scalar>>& pairs) const {
     if (mode != Mode::model_in_data_frustum) return;
     // The data sensor's frustum placed in the model frame by the current estimate.
-    const Transform<D, Scalar> to_sensor = (ctx.transform * frustum.pose).inverse(Eigen::Isometry);
+    const detail::AffineApply<D, Scalar> to_sensor(
+        (ctx.transform * frustum.pose).inverse(Eigen::Isometry));
     Scalar tan_h = 0, tan_v = 0;
     if constexpr (D == 3) {
       tan_h = std::tan(frustum.horizontal_fov / 2);
       tan_v = std::tan(frustum.vertical_fov / 2);
     }
     std::erase_if(pairs, [&](const Correspondence<D, Scalar>& c) {
-      return !contains_local(to_sensor * c.model, tan_h, tan_v);
+      return !contains_local(to_sensor(c.model), tan_h, tan_v);
     });
   }
 

@@ -278,8 +278,9 @@ class BasicIcp {
     result.inlier_count = pairs_.size();
     if (!pairs_.empty()) {
       Scalar sum_sq = 0;
+      const detail::AffineApply<D, Scalar> apply(transform);
       for (const auto& c : pairs_)
-        sum_sq += (c.model - transform * c.data).squaredNorm();
+        sum_sq += (c.model - apply(c.data)).squaredNorm();
       result.rmse = std::sqrt(sum_sq / static_cast<Scalar>(pairs_.size()));
     }
     result.fitness = data_.empty() ? Scalar(0)
@@ -299,7 +300,7 @@ class BasicIcp {
     std::apply([&](const auto&... r) { ((bound_sq = std::min(bound_sq, bound_of(r, ctx))), ...); },
                rejectors);
     pairs_.clear();
-    const auto& t = ctx.transform;
+    const detail::AffineApply<D, Scalar> t(ctx.transform);
     const bool reuse = params.reuse_neighbors && std::isfinite(bound_sq);
     const std::size_t candidates = params.reuse_candidates;
     if (reuse && ctx.iteration == 0) {
@@ -309,7 +310,7 @@ class BasicIcp {
     const Scalar bound = std::sqrt(bound_sq);
     std::size_t searches = 0;
     for (std::size_t j = 0; j < data_.size(); j += stride) {
-      const point_type p = t * data_[j];
+      const point_type p = t(data_[j]);
       bool admitted = true;
       std::apply([&](const auto&... r) { ((admitted = admitted && admits(r, ctx, p)), ...); },
                  rejectors);

@@ -103,10 +103,11 @@ struct PointToPlaneSolver {
       Scalar sum_sq = 0;
       std::size_t rows = 0;
       Vector3 o = Vector3::Zero();
+      const detail::AffineApply<3, Scalar> apply(t);
       for (const auto& pr : pairs) {
         if (!has_normal(pr)) continue;
         const Vector3& n = model_normals[pr.model_index];
-        const Vector3 s_world = t * pr.data;
+        const Vector3 s_world = apply(pr.data);
         if (rows == 0) o = s_world;
         const Vector3 s = s_world - o;
         Vector6 g;

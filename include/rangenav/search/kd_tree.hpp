@@ -180,11 +180,11 @@ class KdTree {
 
   std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
                   Scalar max_distance_sq = unbounded_sq<Scalar>) const {
-    out.resize(k);
+    if (out.size() != k) out.resize(k);  // (a call GCC does not inline: skipped when sized)
     if (k == 0) return 0;
     detail::KnnCollector<Scalar> c(out.data(), k, max_distance_sq);
     if (tree_) tree_->search(c, q);
-    out.resize(c.size());
+    if (c.size() != k) out.resize(c.size());
     return out.size();
   }
 
@@ -279,11 +279,11 @@ class GrowingKdTree {
 
   std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
                   Scalar max_distance_sq = unbounded_sq<Scalar>) const {
-    out.resize(k);
+    if (out.size() != k) out.resize(k);  // (a call GCC does not inline: skipped when sized)
     if (k == 0) return 0;
     detail::KnnCollector<Scalar> c(out.data(), k, max_distance_sq);
     search_all(c, q);
-    out.resize(c.size());
+    if (c.size() != k) out.resize(c.size());
     return out.size();
   }
 
