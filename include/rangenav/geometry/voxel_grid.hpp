@@ -40,7 +40,14 @@ template <PointCloud C>
   // from c * leaf_size, found once per voxel), and the test "same voxel as before" that every
   // point takes is six comparisons, no product, with the same outcome as comparing
   // floor(p * inv) (tested against that definition).
-  const auto first = [inv, leaf_size](Scalar c) {
+  // The voxels of a frame share a few hundred distinct cell coordinates per axis: first(c) is
+  // kept in a small direct-mapped table (libm's nextafter is a call, ~45 instructions).
+  struct Bound {
+    Scalar c = std::numeric_limits<Scalar>::quiet_NaN();  // empty: equal to no c
+    Scalar x = 0;
+  };
+  std::array<Bound, 256> bounds{};
+  const auto first_uncached = [inv, leaf_size](Scalar c) {
     constexpr Scalar inf = std::numeric_limits<Scalar>::infinity();
     Scalar x = c * leaf_size;
     if (x * inv >= c) {
@@ -53,6 +60,11 @@ template <PointCloud C>
       while (x * inv < c);
     }
     return x;
+  };
+  const auto first = [&](Scalar c) {
+    Bound& b = bounds[static_cast<std::uint8_t>(static_cast<std::int64_t>(c))];
+    if (!(b.c == c)) b = {c, first_uncached(c)};
+    return b.x;
   };
   // One accumulator per occupied voxel. Consecutive points (the pixels along a row of an
   // organised frame) mostly share a voxel: they are summed in registers while they fall into
