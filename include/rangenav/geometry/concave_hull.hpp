@@ -148,13 +148,13 @@ class ConcaveHull {
 
   [[nodiscard]] const ConcaveHullParams& params() const { return params_; }
 
-  /// Reserves the per-point scratch for inputs of up to `points` points, so that a larger input
-  /// later does not reallocate them (copying and faulting in fresh pages; see
+  /// Reserves the per-point scratch for inputs of up to `points` points and touches it, so that
+  /// a larger input later neither reallocates it nor faults in fresh pages (see
   /// PlaneExtractor::reserve).
   void reserve(std::size_t points) {
-    (void)cell_index_.get(points);
-    (void)next_in_cell_.get(points);
-    (void)site_of_point_.get(points);
+    cell_index_.reserve(points);
+    next_in_cell_.reserve(points);
+    site_of_point_.reserve(points);
   }
 
   /// The alpha shape of the 2D points of `cloud` as simple polygons with holes (outer rings
@@ -721,6 +721,12 @@ class ConcaveHull {
         capacity_ = n;
       }
       return data_.get();
+    }
+    /// Grows to n elements, written once (zeros) so that their pages are mapped in here.
+    void reserve(std::size_t n) {
+      if (n <= capacity_) return;
+      data_ = std::make_unique<std::uint32_t[]>(n);
+      capacity_ = n;
     }
     [[nodiscard]] std::uint32_t* data() const { return data_.get(); }
     std::uint32_t& operator[](std::size_t i) { return data_[i]; }
