@@ -13,6 +13,7 @@
 #include "rangenav/core/cloud.hpp"
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/point_cloud.hpp"
+#include "rangenav/core/robust_kernel.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/egocentric/floor.hpp"
 #include "rangenav/egocentric/gaze.hpp"
