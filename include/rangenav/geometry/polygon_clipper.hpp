@@ -42,10 +42,11 @@ concept PolygonClipper = requires(const C& clipper, const Polygon2<Scalar>& a,
   { clipper.union_of(a, b) } -> std::same_as<std::vector<Polygon2<Scalar>>>;
 };
 
-/// Boost.Geometry's point and polygon with Polygon2's conventions: outer ring counter-clockwise
-/// (ClockWise = false), open rings (Closed = false).
+/// Boost.Geometry's point with Polygon2's conventions.
 template <class Scalar = double>
 using BoostPoint2 = boost::geometry::model::d2::point_xy<Scalar>;
+/// Boost.Geometry's polygon with Polygon2's conventions: outer ring counter-clockwise
+/// (ClockWise = false), open rings (Closed = false).
 template <class Scalar = double>
 using BoostPolygon2 = boost::geometry::model::polygon<BoostPoint2<Scalar>, false, false>;
 

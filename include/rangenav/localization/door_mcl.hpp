@@ -54,20 +54,21 @@ inline constexpr std::size_t max_tracked_doors = 16;
 
 /// One door's opening angle estimate in a particle: N(mean, variance), rad.
 struct DoorAngleEstimate {
-  double mean{0};
-  double variance{0};
+  double mean{0};      ///< rad, from the door's reference angle
+  double variance{0};  ///< rad^2
 };
 
 /// A particle's state: the pose and the door angle estimates (doors beyond the map's count are
 /// unused).
 struct DoorAwareState {
-  Pose2d pose{};
-  std::array<DoorAngleEstimate, max_tracked_doors> doors{};
+  Pose2d pose{};                                             ///< the robot's pose in the map frame
+  std::array<DoorAngleEstimate, max_tracked_doors> doors{};  ///< one estimate per door of the map
 };
 
+/// Parameters of door-aware MCL (paper 001 §IV).
 struct DoorAwareMclParams {
-  OdometryMotionParams motion{};
-  LikelihoodFieldParams field{};
+  OdometryMotionParams motion{};          ///< odometry motion model
+  LikelihoodFieldParams field{};          ///< the static map's sensor model
   double sigma_d{deg_to_rad(3.0)};        ///< door random walk per update (rad)
   double angle_sigma{deg_to_rad(3.0)};    ///< std. dev. of a measured door angle (rad)
   double dp_epsilon{0.03};                ///< Douglas-Peucker tolerance (m)
@@ -80,6 +81,7 @@ struct DoorAwareMclParams {
   /// the same as standard MCL's (§V.B compares both filters with the same parameters).
   MclParams sampling{};
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     motion.validate(where);
     field.validate(where);
@@ -98,10 +100,12 @@ struct DoorAwareMclParams {
 /// A scan prepared once for all particles: beam end points and the Douglas-Peucker segments,
 /// both in the robot frame.
 struct DoorAwareObservation {
-  std::vector<Eigen::Vector2f> end_points;
-  std::vector<std::pair<Point2d, Point2d>> segments;
+  std::vector<Eigen::Vector2f> end_points;            ///< end points of the used beams
+  std::vector<std::pair<Point2d, Point2d>> segments;  ///< the scan's Douglas-Peucker segments
 };
 
+/// Monte-Carlo localization with a Kalman-filtered opening angle per door in every particle
+/// (paper 001 §IV, Rao-Blackwellised over the door states).
 class DoorAwareMcl {
  public:
   /// `grid` is the static map with the doors removed (remove_doors()); `doors` the detected doors.
@@ -118,9 +122,13 @@ class DoorAwareMcl {
     build_cell_tables(grid);
   }
 
+  /// The parameters.
   [[nodiscard]] const DoorAwareMclParams& params() const { return params_; }
+  /// The doors the filter tracks.
   [[nodiscard]] const std::vector<DoorModel>& doors() const { return doors_; }
+  /// The particles.
   [[nodiscard]] const ParticleFilter<DoorAwareState>& filter() const { return filter_; }
+  /// The static map's likelihood field.
   [[nodiscard]] const LikelihoodFieldModel& field() const { return field_; }
 
   /// Poses from N(mean, diag(sigma^2)); each door's angle starts uniform over its observed range
@@ -224,6 +232,7 @@ class DoorAwareMcl {
       filter_.resample(target, rng);
   }
 
+  /// Number of particles.
   [[nodiscard]] std::size_t particle_count() const { return filter_.size(); }
 
   /// Weighted mean pose.

@@ -89,6 +89,7 @@ inline void squared_distance_1d(float* f, std::size_t n, std::size_t stride, std
   return f;
 }
 
+/// Parameters of the likelihood-field sensor model (Probabilistic Robotics §6.4; AMCL's defaults).
 struct LikelihoodFieldParams {
   double sigma_hit{0.2};       ///< std. deviation of the end point's distance (m)
   double z_hit{0.95};          ///< weight of the Gaussian
@@ -98,6 +99,7 @@ struct LikelihoodFieldParams {
   std::size_t beam_stride{1};  ///< use every beam_stride-th valid beam (>= 1)
   std::size_t max_beams{30};   ///< then at most this many, evenly spaced (0: no limit)
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     detail::require_positive(where, "sigma_hit", sigma_hit);
     detail::require_non_negative(where, "z_hit", z_hit);
@@ -131,12 +133,14 @@ void for_each_used_beam(std::size_t n, const LikelihoodFieldParams& params, F&& 
     f(stride * ((m * span + parts / 2) / parts));
 }
 
+/// The likelihood-field sensor model over an occupancy grid: log p per cell precomputed from an
+/// exact Euclidean distance transform, one lookup per beam end point.
 class LikelihoodFieldModel {
  public:
   /// A scan prepared once for scoring many particles: the end points of the used beams in the
   /// robot frame.
   struct Observation {
-    std::vector<Eigen::Vector2f> end_points;
+    std::vector<Eigen::Vector2f> end_points;  ///< robot frame
   };
 
   /// Precomputes the field of the grid's occupied cells (OccupancyGrid::is_occupied()).
@@ -164,6 +168,7 @@ class LikelihoodFieldModel {
     off_map_ = static_cast<float>(log_likelihood_of_distance(params_.max_distance));
   }
 
+  /// The parameters.
   [[nodiscard]] const LikelihoodFieldParams& params() const { return params_; }
 
   /// log p(z_j | d) for an end point at distance d from the nearest obstacle.
@@ -204,6 +209,7 @@ class LikelihoodFieldModel {
           sensor_pose.transform_point(Point2d(double(q.x()), double(q.y()))).cast<float>());
     });
   }
+  /// As prepare(scan, sensor_pose, out), returning a new Observation.
   template <class S>
   [[nodiscard]] Observation prepare(const LaserScan<S>& scan,
                                     const Pose2d& sensor_pose = {}) const {

@@ -33,6 +33,7 @@
 
 namespace rangenav {
 
+/// Parameters of MonteCarloLocalization: particle counts, KLD-sampling and resampling.
 struct MclParams {
   std::size_t min_particles{500};           ///< KLD lower bound (>= 1)
   std::size_t max_particles{50000};         ///< KLD upper bound (>= min_particles)
@@ -43,6 +44,7 @@ struct MclParams {
   double bin_size_theta{deg_to_rad(10.0)};  ///< KLD histogram bin (rad)
   double resample_threshold{0.5};           ///< resample when N_eff < this * N, in (0, 1]
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     if (min_particles == 0)
       detail::throw_invalid_argument(where, "min_particles", min_particles, "must be >= 1");
@@ -101,18 +103,26 @@ template <class State, class PoseOf>
                     params.max_particles);
 }
 
+/// Monte-Carlo localization (Probabilistic Robotics Table 8.2 with KLD-sampling, Table 8.4)
+/// over any MotionModel and SensorModel of a Pose2d.
 template <class Motion = OdometryMotionModel, class Sensor = LikelihoodFieldModel>
 class MonteCarloLocalization {
  public:
+  /// A filter with these models and parameters and no particles (initialize_* next).
   MonteCarloLocalization(Motion motion, Sensor sensor, const MclParams& params = {})
       : motion_(std::move(motion)), sensor_(std::move(sensor)), params_(params) {
     params_.validate("MonteCarloLocalization");
   }
 
+  /// The parameters.
   [[nodiscard]] const MclParams& params() const { return params_; }
+  /// The motion model.
   [[nodiscard]] const Motion& motion_model() const { return motion_; }
+  /// The sensor model (prepare observations with it).
   [[nodiscard]] const Sensor& sensor_model() const { return sensor_; }
+  /// The particles.
   [[nodiscard]] const ParticleFilter<Pose2d>& filter() const { return filter_; }
+  /// Number of particles.
   [[nodiscard]] std::size_t particle_count() const { return filter_.size(); }
 
   /// Starts from `count` poses drawn from N(mean, diag(sigma^2)) (position tracking).

@@ -36,16 +36,19 @@ concept SensorModel = requires(const S& s, const State& x, const Observation& z)
   { s.log_likelihood(x, z) } -> std::convertible_to<double>;
 };
 
+/// A weighted state.
 template <class State>
 struct Particle {
-  State state{};
+  State state{};         ///< the hypothesis
   double weight{0};      ///< normalised: the weights of a filter sum to 1
   double log_weight{0};  ///< log(weight)
 };
 
+/// A particle filter over any state type (see the file comment).
 template <class State>
 class ParticleFilter {
  public:
+  /// A particle of this filter.
   using particle_type = Particle<State>;
 
   ParticleFilter() = default;
@@ -61,9 +64,13 @@ class ParticleFilter {
     set_uniform_weights();
   }
 
+  /// Number of particles.
   [[nodiscard]] std::size_t size() const { return particles_.size(); }
+  /// True when the filter has no particles.
   [[nodiscard]] bool empty() const { return particles_.empty(); }
+  /// The particles.
   [[nodiscard]] const std::vector<particle_type>& particles() const { return particles_; }
+  /// The particles, for a filter that edits them (weights must stay normalised).
   [[nodiscard]] std::vector<particle_type>& particles() { return particles_; }
 
   /// Moves every particle by the motion model (sampling step).

@@ -83,6 +83,7 @@ struct OccupancyGridParams {
   /// misaligned pass turns transient and its later readings would be discarded as dynamic.
   bool classify_dynamic{true};
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     detail::require_positive(where, "resolution", resolution);
     const auto open_interval = [&](std::string_view name, double v, double lo, double hi) {
@@ -115,6 +116,7 @@ struct ScanClassification {
   /// dynamic points of §III).
   std::vector<Point2d> vanished_points;
 
+  /// Empties every list (a reused classification allocates nothing).
   void clear() {
     static_beams.clear();
     dynamic_beams.clear();
@@ -123,8 +125,11 @@ struct ScanClassification {
   }
 };
 
+/// A log-odds occupancy grid mapped with known poses, with paper 001's transient and
+/// seen-occupied cells and the classification of dynamic readings (§III).
 class OccupancyGrid {
  public:
+  /// A cell (x, y).
   using Index = Eigen::Vector2i;
 
   /// A grid of width x height cells whose cell (0, 0) has its lower-left corner at `origin`;
@@ -173,12 +178,19 @@ class OccupancyGrid {
   }
 
   // ---- geometry ------------------------------------------------------------------------------
+  /// The parameters.
   [[nodiscard]] const OccupancyGridParams& params() const { return params_; }
+  /// Cells along x.
   [[nodiscard]] int width() const { return width_; }
+  /// Cells along y.
   [[nodiscard]] int height() const { return height_; }
+  /// width x height.
   [[nodiscard]] std::size_t cell_count() const { return log_odds_.size(); }
+  /// Cell edge (m).
   [[nodiscard]] double resolution() const { return params_.resolution; }
+  /// The lower-left corner of cell (0, 0) (m).
   [[nodiscard]] const Point2d& origin() const { return origin_; }
+  /// True when the cell lies inside the grid.
   [[nodiscard]] bool contains(const Index& c) const {
     return c.x() >= 0 && c.y() >= 0 && c.x() < width_ && c.y() < height_;
   }
@@ -187,6 +199,7 @@ class OccupancyGrid {
     return {static_cast<int>(std::floor((p.x() - origin_.x()) * inv_resolution_)),
             static_cast<int>(std::floor((p.y() - origin_.y()) * inv_resolution_))};
   }
+  /// The centre of a cell (m).
   [[nodiscard]] Point2d cell_center(const Index& c) const {
     return origin_ + (c.cast<double>() + Point2d::Constant(0.5)) * params_.resolution;
   }
@@ -197,17 +210,23 @@ class OccupancyGrid {
   }
 
   // ---- cell state ----------------------------------------------------------------------------
+  /// The cell's log odds log(p / (1 - p)); 0 = unknown.
   [[nodiscard]] double log_odds_at(const Index& c) const { return log_odds_[linear(c)]; }
+  /// The cell's occupancy probability.
   [[nodiscard]] double probability(const Index& c) const {
     return probability_from_log_odds(log_odds_at(c));
   }
+  /// Occupied: probability above OccupancyGridParams::occupied_probability.
   [[nodiscard]] bool is_occupied(const Index& c) const { return log_odds_at(c) > l_occupied_; }
   /// Observed and leaning free (probability below 0.5).
   [[nodiscard]] bool is_free(const Index& c) const { return log_odds_at(c) < 0; }
+  /// Never observed (log odds exactly 0).
   [[nodiscard]] bool is_unknown(const Index& c) const { return log_odds_at(c) == 0; }
+  /// Was free with high likelihood in a free neighbourhood (paper 001 §III).
   [[nodiscard]] bool is_transient(const Index& c) const {
     return (flags_[linear(c)] & transient_flag) != 0;
   }
+  /// Was occupied with high likelihood (paper 001 §III).
   [[nodiscard]] bool is_seen_occupied(const Index& c) const {
     return (flags_[linear(c)] & seen_occupied_flag) != 0;
   }

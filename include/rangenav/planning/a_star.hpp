@@ -68,7 +68,7 @@ enum class PlanStatus {
 
 /// A planned path: straight segments between waypoints, start first, goal last.
 struct PlannedPath {
-  std::vector<Point2d> waypoints;
+  std::vector<Point2d> waypoints;  ///< start, the Voronoi vertices, goal (m)
   /// One entry per segment (waypoints.size() - 1): the graph edge it follows, or
   /// VoronoiPathGraph::npos for the straight connections of start and goal.
   std::vector<VoronoiPathGraph::index_type> edges;
@@ -77,16 +77,22 @@ struct PlannedPath {
   double length{0.0};  ///< total length (m)
 };
 
+/// The outcome of a query: why it ended, and the path when one was found.
 struct PlanResult {
-  PlanStatus status{PlanStatus::no_path};
-  PlannedPath path;
-  std::size_t expanded{0};  ///< nodes expanded by the graph search
+  PlanStatus status{PlanStatus::no_path};  ///< found, or why not
+  PlannedPath path;                        ///< the path (empty unless found)
+  std::size_t expanded{0};                 ///< nodes expanded by the graph search
+  /// True when a path was found.
   [[nodiscard]] bool found() const { return status == PlanStatus::found; }
 };
 
+/// A* on a VoronoiPathGraph (paper 000 §4, Eq. 6): attaches start and goal to the graph, skips
+/// blocked edges, and keeps its buffers between queries.
 class AStar {
  public:
+  /// A node or edge index.
   using index_type = VoronoiPathGraph::index_type;
+  /// "No node / no edge".
   static constexpr index_type npos = VoronoiPathGraph::npos;
 
   /// Plans on `graph`, which must outlive this object (blocked edges are read at query time).
@@ -112,6 +118,7 @@ class AStar {
     nodes_ = node_tree(nodes.begin(), nodes.end());
   }
 
+  /// The parameters.
   [[nodiscard]] const AStarParams& params() const { return params_; }
 
   /// Distance from the straight segment a-b to the nearest map point (m).
