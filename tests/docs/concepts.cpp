@@ -130,15 +130,15 @@ class SortedXSearch {
   // Calls visit(i, distance_sq) for the points closer than bound_sq(), nearest x first.
   template <class Bound, class Visit>
   void walk(const point_type& q, Bound bound_sq, Visit visit) const {
-    const auto n = static_cast<std::ptrdiff_t>(points_.size());
-    const std::ptrdiff_t mid =
+    const std::size_t n = points_.size();
+    const auto first_not_below =
         std::lower_bound(points_.begin(), points_.end(), q.x(),
-                         [](const point_type& p, double x) { return p.x() < x; }) -
-        points_.begin();
-    for (std::ptrdiff_t up = mid, down = mid - 1; up < n || down >= 0;) {
+                         [](const point_type& p, double x) { return p.x() < x; });
+    std::size_t up = static_cast<std::size_t>(first_not_below - points_.begin()), down = up;
+    while (up < n || down > 0) {  // points_[up] is the next one above, points_[down - 1] below
       const double gap_up = up < n ? points_[up].x() - q.x() : INFINITY;
-      const double gap_down = down >= 0 ? q.x() - points_[down].x() : INFINITY;
-      const std::ptrdiff_t i = gap_up <= gap_down ? up++ : down--;
+      const double gap_down = down > 0 ? q.x() - points_[down - 1].x() : INFINITY;
+      const std::size_t i = gap_up <= gap_down ? up++ : --down;
       const double gap = std::min(gap_up, gap_down);
       if (!(gap * gap < bound_sq())) break;  // every point left is farther in x alone
       const double d_sq = (points_[i] - q).squaredNorm();
