@@ -72,6 +72,7 @@ struct G2oEdge {
 /// The content of a g2o file of one dimension.
 template <int D>
 struct G2oGraph {
+  static constexpr int dimension = D;  ///< 2 or 3
   std::vector<G2oVertex<D>> vertices;  ///< sorted by id
   std::vector<G2oEdge<D>> edges;       ///< in file order
   std::size_t chained_vertices{0};     ///< vertices without a VERTEX line, placed by chaining
