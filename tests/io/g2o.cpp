@@ -239,3 +239,19 @@ TEST_CASE("g2o: the benchmark graphs have the sizes PROVENANCE.md lists", "[io][
         file);
   }
 }
+
+TEST_CASE("g2o: reader limits bound the records and the line length", "[io][g2o]") {
+  io::ReaderLimits limits;
+  limits.max_points = 3;
+  std::istringstream three("VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 0 0 0\nFIX 0 1\n");
+  CHECK_THROWS_WITH(io::read_g2o(three, "test.g2o", limits),
+                    Catch::Contains("test.g2o:3") && Catch::Contains("max_points = 3"));
+  limits = {};
+  limits.max_line_bytes = 16;
+  std::istringstream long_line("VERTEX_SE2 0 0 0 0.000000000001\n");
+  CHECK_THROWS_WITH(io::read_g2o(long_line, "test.g2o", limits),
+                    Catch::Contains("test.g2o:1") && Catch::Contains("max_line_bytes = 16"));
+  test::ScratchDir dir("g2o");
+  const auto file = dir.write("long.g2o", std::string(100, 'x'));
+  CHECK_THROWS_WITH(io::read_g2o(file, limits), Catch::Contains("max_line_bytes"));
+}

@@ -417,7 +417,7 @@ class PoseGraph {
     if (free_count_ == 0) return true;
     auto& system = initialization_system_;
     if (!initialization_ready_) {
-      system.build(free_count_, pairs_, options.backend);
+      system.build(free_count_, pairs_, ordering_, options.backend);
       initialization_ready_ = true;
     }
     const std::size_t m = edges_.size();
@@ -628,7 +628,8 @@ class PoseGraph {
       edge_pair_[e] = pairs.size();
       pairs.emplace_back(a, b);
     }
-    system_.build(free_count_, pairs, backend);
+    ordering_ = detail::block_ordering(free_count_, pairs);
+    system_.build(free_count_, pairs, ordering_, backend);
     pairs_ = std::move(pairs);
     initialization_ready_ = false;
     candidate_ = poses_;
@@ -652,17 +653,24 @@ class PoseGraph {
       // ∂e/∂δb = J_E, ∂e/∂δa = −J_E·Ad(A⁻¹) (relative_pose_error.hpp).
       const Information jb = jr;
       const Information ja = -jr * lie::se_adjoint<D, Scalar>(a_to_b.inverse());
+      // Products evaluated into fixed-size matrices once (the assembly reads them entry-wise).
       const Information wjb = weighted * jb;
       const Error wr = weighted * r;
       if (fb != none) {
-        system_.add_diagonal(fb, jb.transpose() * wjb);
+        const Information hbb = jb.transpose() * wjb;
+        system_.add_diagonal(fb, hbb);
         system_.rhs(fb) -= jb.transpose() * wr;
       }
       if (fa != none) {
-        system_.add_diagonal(fa, ja.transpose() * weighted * ja);
+        const Information wja = weighted * ja;
+        const Information haa = ja.transpose() * wja;
+        system_.add_diagonal(fa, haa);
         system_.rhs(fa) -= ja.transpose() * wr;
       }
-      if (edge_pair_[e] != none) system_.add_off_diagonal(edge_pair_[e], ja.transpose() * wjb);
+      if (edge_pair_[e] != none) {
+        const Information hab = ja.transpose() * wjb;
+        system_.add_off_diagonal(edge_pair_[e], hab);
+      }
     }
     system_.save_diagonal();
   }
@@ -696,6 +704,8 @@ class PoseGraph {
   std::vector<std::size_t> edge_pair_;
   std::size_t free_count_{0};
   std::vector<std::pair<std::size_t, std::size_t>> pairs_;
+  std::vector<std::size_t>
+      ordering_;  // the free nodes' fill-reducing order, shared by both systems
   detail::BlockSystem<Scalar, dof> system_;
   detail::BlockSystem<Scalar, D> initialization_system_;
   bool initialization_ready_{false};

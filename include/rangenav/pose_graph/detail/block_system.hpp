@@ -67,6 +67,30 @@ struct CholmodFor<double> {
 };
 #endif
 
+/// A fill-reducing order of the nodes: approximate minimum degree (Eigen's AMD) on the graph of
+/// `nodes` nodes and the edges `pairs`; position[i] is node i's place in the order.
+inline std::vector<std::size_t> block_ordering(
+    std::size_t nodes, const std::vector<std::pair<std::size_t, std::size_t>>& pairs) {
+  std::vector<std::size_t> position(nodes);
+  if (nodes == 0) return position;
+  // The lower triangle of the adjacency with its diagonal; Eigen's AMD symmetrises it.
+  std::vector<Eigen::Triplet<double, int>> entries;
+  entries.reserve(pairs.size() + nodes);
+  for (std::size_t i = 0; i < nodes; ++i)
+    entries.emplace_back(static_cast<int>(i), static_cast<int>(i), 1.0);
+  for (const auto& [i, j] : pairs)
+    entries.emplace_back(static_cast<int>(std::max(i, j)), static_cast<int>(std::min(i, j)), 1.0);
+  Eigen::SparseMatrix<double, Eigen::ColMajor, int> graph(static_cast<Eigen::Index>(nodes),
+                                                          static_cast<Eigen::Index>(nodes));
+  graph.setFromTriplets(entries.begin(), entries.end());
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;
+  Eigen::AMDOrdering<int> amd;
+  amd(graph, order);  // order.indices()[new] = old
+  for (std::size_t k = 0; k < nodes; ++k)
+    position[static_cast<std::size_t>(order.indices()[static_cast<Eigen::Index>(k)])] = k;
+  return position;
+}
+
 template <class Scalar, int B>
 class BlockSystem {
  public:
@@ -100,29 +124,14 @@ class BlockSystem {
   ~BlockSystem() = default;
 
   /// Builds the pattern of `nodes` diagonal blocks and the off-diagonal blocks of `pairs` (node
-  /// indices, i ≠ j; repeated pairs share one block). Afterwards off_diagonal_slot(k) names the
-  /// block of pairs[k].
+  /// indices, i ≠ j; repeated pairs share one block), with node i's block at `position[i]` (a
+  /// permutation, e.g. block_ordering's). Afterwards off-diagonal slot k is the block of
+  /// pairs[k].
   void build(std::size_t nodes, const std::vector<std::pair<std::size_t, std::size_t>>& pairs,
+             const std::vector<std::size_t>& position,
              SparseBackend backend = SparseBackend::automatic) {
     nodes_ = nodes;
-    // AMD on the block graph (lower triangle of the node adjacency; Eigen symmetrises it).
-    std::vector<Eigen::Triplet<Scalar, int>> entries;
-    entries.reserve(pairs.size() + nodes);
-    for (std::size_t i = 0; i < nodes; ++i)
-      entries.emplace_back(static_cast<int>(i), static_cast<int>(i), Scalar(1));
-    for (const auto& [i, j] : pairs)
-      entries.emplace_back(static_cast<int>(std::max(i, j)), static_cast<int>(std::min(i, j)),
-                           Scalar(1));
-    position_.resize(nodes);
-    if (nodes > 0) {
-      SparseMatrix graph(static_cast<Eigen::Index>(nodes), static_cast<Eigen::Index>(nodes));
-      graph.setFromTriplets(entries.begin(), entries.end());
-      Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;
-      Eigen::AMDOrdering<int> amd;
-      amd(graph, order);  // order.indices()[new] = old
-      for (std::size_t k = 0; k < nodes; ++k)
-        position_[static_cast<std::size_t>(order.indices()[static_cast<Eigen::Index>(k)])] = k;
-    }
+    position_ = position;
 
     // Block columns in the new order: rows (block indices ≤ column) sorted, diagonal last.
     std::vector<std::vector<std::size_t>> rows(nodes);
