@@ -53,8 +53,11 @@ template <class Derived>
 
 /// SO(D) exponential: the rotation matrix of the angle φ (2D) or of the rotation vector φ (3D,
 /// Rodrigues' formula, Barfoot Eq. 7.7).
-template <int D, std::floating_point Scalar>
-[[nodiscard]] Eigen::Matrix<Scalar, D, D> so_exp(const RotationTangent<D, Scalar>& phi) {
+template <int D, class Derived>
+[[nodiscard]] Eigen::Matrix<typename Derived::Scalar, D, D> so_exp(
+    const Eigen::MatrixBase<Derived>& phi) {
+  using Scalar = typename Derived::Scalar;
+  static_assert(Derived::SizeAtCompileTime == rotation_dof<D>, "so_exp: φ has the wrong size");
   if constexpr (D == 2) {
     return Eigen::Rotation2D<Scalar>(phi(0)).toRotationMatrix();
   } else {
@@ -64,7 +67,7 @@ template <int D, std::floating_point Scalar>
       const Eigen::Matrix<Scalar, 3, 3> w = skew(phi);
       return Eigen::Matrix<Scalar, 3, 3>::Identity() + w + Scalar(0.5) * w * w;
     }
-    return Eigen::AngleAxis<Scalar>(angle, phi / angle).toRotationMatrix();
+    return Eigen::AngleAxis<Scalar>(angle, (phi / angle).eval()).toRotationMatrix();
   }
 }
 
@@ -87,9 +90,13 @@ template <int D, std::floating_point Scalar>
 
 /// The left Jacobian V of SO(D) that maps ρ to the translation of Exp(ξ): t = V(φ)·ρ (Barfoot
 /// Eq. 7.83 in 3D; Solà Eq. 165 in 2D).
-template <int D, std::floating_point Scalar>
-[[nodiscard]] Eigen::Matrix<Scalar, D, D> so_left_jacobian(const RotationTangent<D, Scalar>& phi) {
+template <int D, class Derived>
+[[nodiscard]] Eigen::Matrix<typename Derived::Scalar, D, D> so_left_jacobian(
+    const Eigen::MatrixBase<Derived>& phi) {
+  using Scalar = typename Derived::Scalar;
   using Matrix = Eigen::Matrix<Scalar, D, D>;
+  static_assert(Derived::SizeAtCompileTime == rotation_dof<D>,
+                "so_left_jacobian: φ has the wrong size");
   if constexpr (D == 2) {
     const Scalar t = phi(0);
     Scalar a, b;  // sin(t)/t and (1 − cos(t))/t
@@ -114,8 +121,10 @@ template <int D, std::floating_point Scalar>
 }
 
 /// SE(D) exponential Exp(ξ) = exp(ξ^): rotation so_exp(φ), translation so_left_jacobian(φ)·ρ.
-template <int D, std::floating_point Scalar>
-[[nodiscard]] Transform<D, Scalar> se_exp(const PoseTangent<D, Scalar>& xi) {
+template <int D, class Derived>
+[[nodiscard]] Transform<D, typename Derived::Scalar> se_exp(const Eigen::MatrixBase<Derived>& xi) {
+  using Scalar = typename Derived::Scalar;
+  static_assert(Derived::SizeAtCompileTime == pose_dof<D>, "se_exp: ξ has the wrong size");
   const RotationTangent<D, Scalar> phi = xi.template tail<rotation_dof<D>>();
   Transform<D, Scalar> t = Transform<D, Scalar>::Identity();
   t.linear() = so_exp<D>(phi);
@@ -156,13 +165,13 @@ template <int D, std::floating_point Scalar>
 /// The right retraction T ⊞ ξ = T · [[Exp(φ), ρ], [0, 1]]: the rotation is perturbed in the
 /// body frame and the translation by R·ρ. It agrees with T·Exp(ξ) to first order (so Jacobians
 /// derived for one hold for the other) and is cheaper; the pose graph updates its poses with it.
-template <int D, std::floating_point Scalar>
-[[nodiscard]] Transform<D, Scalar> retract_right(const Transform<D, Scalar>& t,
-                                                 const PoseTangent<D, Scalar>& xi) {
-  Transform<D, Scalar> out;
+template <int D, class Derived>
+[[nodiscard]] Transform<D, typename Derived::Scalar> retract_right(
+    const Transform<D, typename Derived::Scalar>& t, const Eigen::MatrixBase<Derived>& xi) {
+  static_assert(Derived::SizeAtCompileTime == pose_dof<D>, "retract_right: ξ has the wrong size");
+  Transform<D, typename Derived::Scalar> out;
   out.translation() = t.translation() + t.linear() * xi.template head<D>();
-  out.linear() =
-      t.linear() * so_exp<D>(RotationTangent<D, Scalar>(xi.template tail<rotation_dof<D>>()));
+  out.linear() = t.linear() * so_exp<D>(xi.template tail<rotation_dof<D>>());
   out.makeAffine();
   return out;
 }

@@ -18,8 +18,8 @@
 // vertex with the next lower id through an edge between the two (the odometry chain), otherwise
 // breadth-first from the placed vertices through the edges in file order; a part of the graph
 // with no placed vertex starts at the identity. Malformed lines raise io_error naming the file,
-// the line and the field; memory grows only with the number of lines read (ids go through a
-// hash map, never index an array).
+// the line and the field; memory grows only with the number of records read, which
+// ReaderLimits bounds with the line length (ids go through a hash map, never index an array).
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
@@ -46,6 +46,7 @@
 #include "rangenav/core/lie.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/io/line_reader.hpp"
+#include "rangenav/io/reader_limits.hpp"
 #include "rangenav/io/trajectory.hpp"
 
 namespace rangenav::io {
@@ -72,6 +73,7 @@ struct G2oEdge {
 /// The content of a g2o file of one dimension.
 template <int D>
 struct G2oGraph {
+  static constexpr int dimension = D;  ///< 2 or 3
   std::vector<G2oVertex<D>> vertices;  ///< sorted by id
   std::vector<G2oEdge<D>> edges;       ///< in file order
   std::size_t chained_vertices{0};     ///< vertices without a VERTEX line, placed by chaining
@@ -272,16 +274,22 @@ G2oGraph<D> g2o_finish(G2oReader<D>& reader, std::string_view name) {
   return graph;
 }
 
-// Lines of a stream with LineReader's interface (next, line_number, fail_line).
+// Lines of a stream with LineReader's interface (next, line_number, fail_line), each at most
+// max_line_bytes long.
 class IstreamLines {
  public:
-  IstreamLines(std::istream& in, std::string_view name) : in_(in), name_(name) {}
+  IstreamLines(std::istream& in, std::string_view name, std::size_t max_line_bytes)
+      : in_(in), name_(name), max_line_(max_line_bytes) {}
   bool next(std::string_view& line) {
-    if (!std::getline(in_, text_)) {
+    bool too_long = false;
+    if (!read_bounded_line(in_, text_, max_line_, too_long)) {
       if (in_.bad()) throw io_error("rangenav: g2o: " + name_ + ": read error");
       return false;
     }
     ++line_number_;
+    if (too_long)
+      fail_line("line longer than ReaderLimits::max_line_bytes = " + std::to_string(max_line_) +
+                " bytes");
     if (!text_.empty() && text_.back() == '\r') text_.pop_back();
     line = text_;
     return true;
@@ -295,14 +303,16 @@ class IstreamLines {
  private:
   std::istream& in_;
   std::string name_;
+  std::size_t max_line_;
   std::string text_;
   std::size_t line_number_{0};
 };
 
 // Reads every line of `lines` (a LineReader or IstreamLines); see read_g2o.
 template <class Lines>
-G2oFile read_g2o_lines(Lines& lines, std::string_view name) {
+G2oFile read_g2o_lines(Lines& lines, std::string_view name, const ReaderLimits& limits) {
   int dimension = 0;
+  std::size_t records = 0;
   G2oReader<2> planar;
   G2oReader<3> spatial;
   std::string_view text;
@@ -313,6 +323,10 @@ G2oFile read_g2o_lines(Lines& lines, std::string_view name) {
     if (tokens.empty() || tokens[0].front() == '#') continue;
     const std::size_t line = lines.line_number();
     const std::string_view tag = tokens[0];
+    // Every vertex, edge and fixed id is a record (FIX lines may list many ids).
+    records += tag == "FIX" ? std::max<std::size_t>(tokens.size() - 1, 1) : 1;
+    if (records > limits.max_points)
+      fail(exceeds_limit("record count", records, "max_points", limits.max_points));
     const auto expect = [&](std::size_t count) {
       if (tokens.size() != count)
         fail(std::string(tag) + ": expected " + std::to_string(count) + " fields, found " +
@@ -378,22 +392,26 @@ inline void append_g2o_number(std::string& out, double value) {
 }  // namespace detail
 
 /// Reads a g2o file (plain or gzip); see the file comment. Throws io_error for an unreadable
-/// file or a malformed line (naming file, line and field).
-inline G2oFile read_g2o(const std::filesystem::path& path) {
-  LineReader lines(path, detail::g2o_where);
-  return detail::read_g2o_lines(lines, path.string());
+/// file, a malformed line (naming file, line and field), a line longer than
+/// limits.max_line_bytes or more than limits.max_points records (vertices, edges, fixed ids).
+inline G2oFile read_g2o(const std::filesystem::path& path, const ReaderLimits& limits = {}) {
+  limits.validate(detail::g2o_where);
+  LineReader lines(path, detail::g2o_where, limits.max_line_bytes);
+  return detail::read_g2o_lines(lines, path.string(), limits);
 }
 
 /// Reads g2o text from a stream; `name` stands for the source in error messages.
-inline G2oFile read_g2o(std::istream& in, std::string_view name = "<stream>") {
-  detail::IstreamLines lines(in, name);
-  return detail::read_g2o_lines(lines, name);
+inline G2oFile read_g2o(std::istream& in, std::string_view name = "<stream>",
+                        const ReaderLimits& limits = {}) {
+  limits.validate(detail::g2o_where);
+  detail::IstreamLines lines(in, name, limits.max_line_bytes);
+  return detail::read_g2o_lines(lines, name, limits);
 }
 
 /// Reads a g2o file that must hold D-dimensional elements; throws io_error for the other kind.
 template <int D>
-G2oGraph<D> read_g2o_as(const std::filesystem::path& path) {
-  G2oFile file = read_g2o(path);
+G2oGraph<D> read_g2o_as(const std::filesystem::path& path, const ReaderLimits& limits = {}) {
+  G2oFile file = read_g2o(path, limits);
   if (auto* graph = std::get_if<G2oGraph<D>>(&file)) return std::move(*graph);
   throw io_error("rangenav: g2o: " + path.string() + ": holds " + std::to_string(5 - D) +
                  "D elements, expected " + std::to_string(D) + "D");

@@ -120,7 +120,8 @@ enum class PoseGraphTermination {
   return "unknown";
 }
 
-/// Settings of PoseGraph::optimize(). The defaults suit graphs of any size and origin.
+/// Settings of PoseGraph::optimize() and PoseGraph::initialize(). The defaults suit graphs of any
+/// size and origin.
 template <std::floating_point Scalar = double>
 struct PoseGraphOptions {
   /// Maximum number of Levenberg-Marquardt steps tried (accepted or not).
@@ -129,9 +130,17 @@ struct PoseGraphOptions {
   Scalar function_tolerance = Scalar(1e-8);
   /// Stop when the largest entry of an accepted step is below this (metres / radians).
   Scalar step_tolerance = Scalar(1e-12);
-  /// Initial damping λ, relative to the diagonal of the normal equations (Ceres' default: the
-  /// inverse of its initial trust-region radius 10⁴).
-  Scalar initial_lambda = Scalar(1e-4);
+  /// Initial damping λ, relative to the diagonal of the normal equations. Small, because pose
+  /// graphs are badly conditioned (the bending modes of long loops have eigenvalues many orders
+  /// below the diagonal, and Marquardt's damping λ·diag(H) smothers them unless λ is below
+  /// 1/condition): from a good start (initialize(), or a warm re-optimisation) the Gauss-Newton
+  /// step is then taken at once; from a poor one, rejected steps raise λ by Nielsen's rule (×2,
+  /// ×4, ×8, ...), to 10⁻⁴ after six.
+  Scalar initial_lambda = Scalar(1e-10);
+  /// The sparse Cholesky factorisation. automatic: CHOLMOD's supernodal Cholesky where rangenav
+  /// was built with it (RANGENAV_HAVE_CHOLMOD) and the graph's fill makes it pay (large 3D
+  /// graphs), Eigen's SimplicialLDLT otherwise. The results agree to rounding.
+  SparseBackend backend = SparseBackend::automatic;
 
   /// Throws invalid_argument for a setting out of range.
   void validate() const {
@@ -141,6 +150,10 @@ struct PoseGraphOptions {
     detail::require_non_negative(where, "function_tolerance", function_tolerance);
     detail::require_non_negative(where, "step_tolerance", step_tolerance);
     detail::require_positive(where, "initial_lambda", initial_lambda);
+    if (backend == SparseBackend::cholmod && !(have_cholmod && std::is_same_v<Scalar, double>))
+      detail::throw_invalid(where,
+                            "backend = cholmod, but rangenav was built without CHOLMOD "
+                            "(RANGENAV_HAVE_CHOLMOD) or Scalar is not double");
   }
 };
 
@@ -153,6 +166,7 @@ struct PoseGraphResult {
   Scalar cost_final{0};    ///< F after
   int iterations{0};       ///< steps tried (each one a factorisation and a solve)
   int accepted_steps{0};   ///< steps that lowered the cost
+  bool cholmod{false};     ///< true when CHOLMOD factored the normal equations (see backend)
   PoseGraphTermination termination{PoseGraphTermination::nothing_to_optimize};
 
   /// True when the optimiser stopped at a minimum (cost or step tolerance reached, or nothing to
@@ -295,8 +309,9 @@ class PoseGraph {
   /// invalid_argument for invalid options; numerical trouble is reported in the result.
   Result optimize(const Options& options = Options{}) {
     options.validate();
-    prepare();
+    prepare(options.backend);
     Result result;
+    result.cholmod = system_.uses_cholmod();
     Evaluation current = evaluate(poses_);
     result.chi2_initial = result.chi2_final = current.chi2;
     result.cost_initial = result.cost_final = current.cost;
@@ -391,16 +406,18 @@ class PoseGraph {
   /// by it (IRLS on each linear problem with that sub-problem's χ²), so a false loop closure
   /// does not bend the starting point. Fixed nodes and gauge anchors keep their poses. Returns
   /// false, leaving the poses unchanged, when a linear system is singular (a free node whose
-  /// edges carry no rotation or no translation information).
-  bool initialize() {
+  /// edges carry no rotation or no translation information). Of `options`, only `backend` is
+  /// used.
+  bool initialize(const Options& options = Options{}) {
     using Rotation = Eigen::Matrix<Scalar, D, D>;
     using Dense = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
     constexpr int rdof = lie::rotation_dof<D>;
-    prepare();
+    options.validate();
+    prepare(options.backend);
     if (free_count_ == 0) return true;
     auto& system = initialization_system_;
     if (!initialization_ready_) {
-      system.build(free_count_, pairs_);
+      system.build(free_count_, pairs_, ordering_, options.backend);
       initialization_ready_ = true;
     }
     const std::size_t m = edges_.size();
@@ -575,8 +592,9 @@ class PoseGraph {
 
   // Chooses the free nodes (not fixed, not a gauge anchor) and builds the normal equations'
   // pattern; runs only after the graph's structure changed.
-  void prepare() {
-    if (!structure_changed_) return;
+  void prepare(SparseBackend backend) {
+    if (!structure_changed_ && backend == backend_) return;
+    backend_ = backend;
     const std::size_t n = poses_.size();
     // Connected parts (union-find with path halving); each part without a fixed node gets its
     // lowest-numbered node as the anchor of the gauge.
@@ -610,7 +628,8 @@ class PoseGraph {
       edge_pair_[e] = pairs.size();
       pairs.emplace_back(a, b);
     }
-    system_.build(free_count_, pairs);
+    ordering_ = detail::block_ordering(free_count_, pairs);
+    system_.build(free_count_, pairs, ordering_, backend);
     pairs_ = std::move(pairs);
     initialization_ready_ = false;
     candidate_ = poses_;
@@ -634,17 +653,24 @@ class PoseGraph {
       // ∂e/∂δb = J_E, ∂e/∂δa = −J_E·Ad(A⁻¹) (relative_pose_error.hpp).
       const Information jb = jr;
       const Information ja = -jr * lie::se_adjoint<D, Scalar>(a_to_b.inverse());
+      // Products evaluated into fixed-size matrices once (the assembly reads them entry-wise).
       const Information wjb = weighted * jb;
       const Error wr = weighted * r;
       if (fb != none) {
-        system_.add_diagonal(fb, jb.transpose() * wjb);
+        const Information hbb = jb.transpose() * wjb;
+        system_.add_diagonal(fb, hbb);
         system_.rhs(fb) -= jb.transpose() * wr;
       }
       if (fa != none) {
-        system_.add_diagonal(fa, ja.transpose() * weighted * ja);
+        const Information wja = weighted * ja;
+        const Information haa = ja.transpose() * wja;
+        system_.add_diagonal(fa, haa);
         system_.rhs(fa) -= ja.transpose() * wr;
       }
-      if (edge_pair_[e] != none) system_.add_off_diagonal(edge_pair_[e], ja.transpose() * wjb);
+      if (edge_pair_[e] != none) {
+        const Information hab = ja.transpose() * wjb;
+        system_.add_off_diagonal(edge_pair_[e], hab);
+      }
     }
     system_.save_diagonal();
   }
@@ -660,7 +686,7 @@ class PoseGraph {
       const std::size_t f = free_index_[i];
       if (f == none) continue;
       const Error delta = step_.template segment<dof>(static_cast<Eigen::Index>(f * dof));
-      out[i] = lie::retract_right<D, Scalar>(poses_[i], delta);
+      out[i] = lie::retract_right<D>(poses_[i], delta);
     }
   }
 
@@ -671,12 +697,15 @@ class PoseGraph {
   std::vector<Edge> edges_;
   std::vector<Pose> inverse_measurements_;
   bool structure_changed_{true};
+  SparseBackend backend_{SparseBackend::automatic};
   // Derived from the structure by prepare().
   std::vector<bool> anchored_;
   std::vector<std::size_t> free_index_;
   std::vector<std::size_t> edge_pair_;
   std::size_t free_count_{0};
   std::vector<std::pair<std::size_t, std::size_t>> pairs_;
+  std::vector<std::size_t>
+      ordering_;  // the free nodes' fill-reducing order, shared by both systems
   detail::BlockSystem<Scalar, dof> system_;
   detail::BlockSystem<Scalar, D> initialization_system_;
   bool initialization_ready_{false};

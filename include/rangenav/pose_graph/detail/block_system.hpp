@@ -10,6 +10,12 @@
 // the assembled matrix in place (no permuted copy per iteration); its symbolic analysis is done
 // once per pattern. Each block knows where its columns start in the value array, so assembly is
 // a sequence of contiguous additions, with no triplets and no sort.
+//
+// Where SuiteSparse's CHOLMOD is available (RANGENAV_HAVE_CHOLMOD, target rangenav::cholmod), a
+// pattern whose factorisation costs many flops per entry of L (CHOLMOD's own test for when a
+// supernodal factorisation pays: flops ≥ supernodal_switch·nnz(L), typical of 3D graphs) is
+// factored by CHOLMOD's supernodal Cholesky instead, with CHOLMOD's ordering; both are exact,
+// so the results agree to rounding.
 
 #include <Eigen/Core>
 #include <Eigen/OrderingMethods>
@@ -18,10 +24,72 @@
 #include <algorithm>
 #include <cstddef>
 #include <memory>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
+#ifdef RANGENAV_HAVE_CHOLMOD
+#include <Eigen/CholmodSupport>
+#endif
+
+namespace rangenav {
+
+/// Which sparse Cholesky factorisation solves the pose graph's normal equations.
+enum class SparseBackend {
+  automatic,  ///< CHOLMOD's supernodal factorisation where it pays and is available, else Eigen
+  eigen,      ///< Eigen's SimplicialLDLT (header-only)
+  cholmod     ///< CHOLMOD's supernodal Cholesky (needs RANGENAV_HAVE_CHOLMOD)
+};
+
+/// True when rangenav was built with CHOLMOD (RANGENAV_HAVE_CHOLMOD).
+inline constexpr bool have_cholmod =
+#ifdef RANGENAV_HAVE_CHOLMOD
+    true;
+#else
+    false;
+#endif
+
+}  // namespace rangenav
+
 namespace rangenav::detail {
+
+#ifdef RANGENAV_HAVE_CHOLMOD
+// CHOLMOD factors double-precision matrices only; other scalars always use Eigen.
+struct NoCholmod {};
+template <class Scalar>
+struct CholmodFor {
+  using type = NoCholmod;
+};
+template <>
+struct CholmodFor<double> {
+  using type =
+      Eigen::CholmodDecomposition<Eigen::SparseMatrix<double, Eigen::ColMajor, int>, Eigen::Upper>;
+};
+#endif
+
+/// A fill-reducing order of the nodes: approximate minimum degree (Eigen's AMD) on the graph of
+/// `nodes` nodes and the edges `pairs`; position[i] is node i's place in the order.
+inline std::vector<std::size_t> block_ordering(
+    std::size_t nodes, const std::vector<std::pair<std::size_t, std::size_t>>& pairs) {
+  std::vector<std::size_t> position(nodes);
+  if (nodes == 0) return position;
+  // The lower triangle of the adjacency with its diagonal; Eigen's AMD symmetrises it.
+  std::vector<Eigen::Triplet<double, int>> entries;
+  entries.reserve(pairs.size() + nodes);
+  for (std::size_t i = 0; i < nodes; ++i)
+    entries.emplace_back(static_cast<int>(i), static_cast<int>(i), 1.0);
+  for (const auto& [i, j] : pairs)
+    entries.emplace_back(static_cast<int>(std::max(i, j)), static_cast<int>(std::min(i, j)), 1.0);
+  Eigen::SparseMatrix<double, Eigen::ColMajor, int> graph(static_cast<Eigen::Index>(nodes),
+                                                          static_cast<Eigen::Index>(nodes));
+  graph.setFromTriplets(entries.begin(), entries.end());
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;
+  Eigen::AMDOrdering<int> amd;
+  amd(graph, order);  // order.indices()[new] = old
+  for (std::size_t k = 0; k < nodes; ++k)
+    position[static_cast<std::size_t>(order.indices()[static_cast<Eigen::Index>(k)])] = k;
+  return position;
+}
 
 template <class Scalar, int B>
 class BlockSystem {
@@ -40,8 +108,9 @@ class BlockSystem {
         matrix_(other.matrix_),
         diagonal_values_(other.diagonal_values_),
         floor_(other.floor_),
-        rhs_(other.rhs_) {
-    if (matrix_.rows() > 0) solver_->analyzePattern(matrix_);
+        rhs_(other.rhs_),
+        use_cholmod_(other.use_cholmod_) {
+    if (matrix_.rows() > 0) analyze(use_cholmod_ ? SparseBackend::cholmod : SparseBackend::eigen);
   }
   BlockSystem& operator=(const BlockSystem& other) {
     if (this != &other) {
@@ -55,28 +124,14 @@ class BlockSystem {
   ~BlockSystem() = default;
 
   /// Builds the pattern of `nodes` diagonal blocks and the off-diagonal blocks of `pairs` (node
-  /// indices, i ≠ j; repeated pairs share one block). Afterwards off_diagonal_slot(k) names the
-  /// block of pairs[k].
-  void build(std::size_t nodes, const std::vector<std::pair<std::size_t, std::size_t>>& pairs) {
+  /// indices, i ≠ j; repeated pairs share one block), with node i's block at `position[i]` (a
+  /// permutation, e.g. block_ordering's). Afterwards off-diagonal slot k is the block of
+  /// pairs[k].
+  void build(std::size_t nodes, const std::vector<std::pair<std::size_t, std::size_t>>& pairs,
+             const std::vector<std::size_t>& position,
+             SparseBackend backend = SparseBackend::automatic) {
     nodes_ = nodes;
-    // AMD on the block graph (lower triangle of the node adjacency; Eigen symmetrises it).
-    std::vector<Eigen::Triplet<Scalar, int>> entries;
-    entries.reserve(pairs.size() + nodes);
-    for (std::size_t i = 0; i < nodes; ++i)
-      entries.emplace_back(static_cast<int>(i), static_cast<int>(i), Scalar(1));
-    for (const auto& [i, j] : pairs)
-      entries.emplace_back(static_cast<int>(std::max(i, j)), static_cast<int>(std::min(i, j)),
-                           Scalar(1));
-    position_.resize(nodes);
-    if (nodes > 0) {
-      SparseMatrix graph(static_cast<Eigen::Index>(nodes), static_cast<Eigen::Index>(nodes));
-      graph.setFromTriplets(entries.begin(), entries.end());
-      Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;
-      Eigen::AMDOrdering<int> amd;
-      amd(graph, order);  // order.indices()[new] = old
-      for (std::size_t k = 0; k < nodes; ++k)
-        position_[static_cast<std::size_t>(order.indices()[static_cast<Eigen::Index>(k)])] = k;
-    }
+    position_ = position;
 
     // Block columns in the new order: rows (block indices ≤ column) sorted, diagonal last.
     std::vector<std::vector<std::size_t>> rows(nodes);
@@ -130,8 +185,7 @@ class BlockSystem {
     }
     diagonal_values_.resize(n);
     rhs_.resize(n);
-    if (!solver_) solver_ = std::make_unique<Solver>();  // moved from
-    if (n > 0) solver_->analyzePattern(matrix_);
+    if (n > 0) analyze(backend);
   }
 
   [[nodiscard]] std::size_t nodes() const { return nodes_; }
@@ -219,15 +273,28 @@ class BlockSystem {
 
   /// Numeric factorisation; false when it fails (not positive definite to working precision).
   bool factorize() {
-    solver_->factorize(matrix_);
-    if (solver_->info() != Eigen::Success) return false;
+#ifdef RANGENAV_HAVE_CHOLMOD
+    if constexpr (std::is_same_v<Scalar, double>) {
+      if (use_cholmod_) {
+        cholmod_->factorize(matrix_);
+        return cholmod_->info() == Eigen::Success;  // fails unless positive definite
+      }
+    }
+#endif
+    eigen_->factorize(matrix_);
+    if (eigen_->info() != Eigen::Success) return false;
     // LDLT also "succeeds" on an indefinite matrix: require D > 0.
-    return (solver_->vectorD().array() > Scalar(0)).all();
+    return (eigen_->vectorD().array() > Scalar(0)).all();
+  }
+
+  /// True when CHOLMOD factors this pattern.
+  [[nodiscard]] bool uses_cholmod() const {
+    return use_cholmod_;
   }
 
   /// Solves for the current right-hand side; x is in the order of the nodes (x(i) = segment i).
   void solve(Vector& x) {
-    solution_ = solver_->solve(rhs_);
+    solve_into(rhs_, solution_);
     x.resize(static_cast<Eigen::Index>(nodes_ * B));
     for (std::size_t i = 0; i < nodes_; ++i)
       x.template segment<B>(static_cast<Eigen::Index>(i * B)) =
@@ -241,16 +308,12 @@ class BlockSystem {
     for (std::size_t i = 0; i < nodes_; ++i)
       permuted.template middleRows<B>(static_cast<Eigen::Index>(position_[i] * B)) =
           rhs.template middleRows<B>(static_cast<Eigen::Index>(i * B));
-    const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> solved = solver_->solve(permuted);
+    Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> solved;
+    solve_into(permuted, solved);
     x.resize(rhs.rows(), rhs.cols());
     for (std::size_t i = 0; i < nodes_; ++i)
       x.template middleRows<B>(static_cast<Eigen::Index>(i * B)) =
           solved.template middleRows<B>(static_cast<Eigen::Index>(position_[i] * B));
-  }
-
-  /// Number of stored entries of the factor L (a measure of fill-in).
-  [[nodiscard]] Eigen::Index factor_non_zeros() const {
-    return solver_->matrixL().nestedExpression().nonZeros();
   }
 
  private:
@@ -259,6 +322,41 @@ class BlockSystem {
     int offset;  // position of the block's first row within each of its columns
     bool transposed;
   };
+
+  // Symbolic analysis by the chosen backend (see the file comment).
+  void analyze(SparseBackend backend) {
+    use_cholmod_ = false;
+#ifdef RANGENAV_HAVE_CHOLMOD
+    if constexpr (std::is_same_v<Scalar, double>) {
+      if (backend != SparseBackend::eigen) {
+        cholmod_ = std::make_unique<Cholmod>();
+        cholmod_->setMode(Eigen::CholmodSupernodalLLt);
+        cholmod_->analyzePattern(matrix_);
+        const auto& common = cholmod_->cholmod();
+        use_cholmod_ =
+            backend == SparseBackend::cholmod || common.fl >= common.supernodal_switch * common.lnz;
+        if (use_cholmod_) return;
+        cholmod_.reset();
+      }
+    }
+#endif
+    (void)backend;
+    eigen_ = std::make_unique<EigenSolver>();
+    eigen_->analyzePattern(matrix_);
+  }
+
+  template <class Rhs, class Out>
+  void solve_into(const Rhs& rhs, Out& out) const {
+#ifdef RANGENAV_HAVE_CHOLMOD
+    if constexpr (std::is_same_v<Scalar, double>) {
+      if (use_cholmod_) {
+        out = cholmod_->solve(rhs);
+        return;
+      }
+    }
+#endif
+    out = eigen_->solve(rhs);
+  }
 
   Scalar* diagonal_entry(std::size_t i, int c) {
     const Slot& s = diagonal_[i];
@@ -274,9 +372,15 @@ class BlockSystem {
   Scalar floor_{0};
   Vector rhs_;
   Vector solution_;
-  using Solver = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Upper, Eigen::NaturalOrdering<int>>;
   // Held by pointer: Eigen's solvers can be neither copied nor moved.
-  std::unique_ptr<Solver> solver_ = std::make_unique<Solver>();
+  using EigenSolver =
+      Eigen::SimplicialLDLT<SparseMatrix, Eigen::Upper, Eigen::NaturalOrdering<int>>;
+  std::unique_ptr<EigenSolver> eigen_;
+#ifdef RANGENAV_HAVE_CHOLMOD
+  using Cholmod = typename CholmodFor<Scalar>::type;
+  std::unique_ptr<Cholmod> cholmod_;
+#endif
+  bool use_cholmod_{false};
 };
 
 }  // namespace rangenav::detail
