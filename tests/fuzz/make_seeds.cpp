@@ -1,8 +1,8 @@
 // Writes the seed corpus of every harness in tests/fuzz: small files made by the library's own
-// writers (PCD, PLY, TUM, x-y-theta, world files) and, for the formats rangenav only reads, files
-// laid out as their specifications say (CARMEN logs with each record type and a saturation value,
-// PGM images, relations, MRPT pose matrices), plain and gzip-compressed where the reader takes
-// both. Usage: make_seeds OUTPUT_DIR (creates OUTPUT_DIR/<harness>/...).
+// writers (PCD, PLY, TUM, x-y-theta, g2o, world files) and, for the formats rangenav only reads,
+// files laid out as their specifications say (CARMEN logs with each record type and a saturation
+// value, PGM images, relations, MRPT pose matrices), plain and gzip-compressed where the reader
+// takes both. Usage: make_seeds OUTPUT_DIR (creates OUTPUT_DIR/<harness>/...).
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "rangenav/io/g2o.hpp"
 #include "rangenav/io/pcd.hpp"
 #include "rangenav/io/ply.hpp"
 #include "rangenav/io/trajectory.hpp"
@@ -205,6 +206,54 @@ void world_seeds(const fs::path& dir) {
              "wall 1 1 2 2\n");
 }
 
+void g2o_seeds(const fs::path& dir) {
+  // A square loop in 2D and a short chain in 3D, written by write_g2o.
+  io::G2oGraph<2> planar;
+  for (int k = 0; k < 4; ++k) {
+    io::G2oVertex<2> v;
+    v.id = k;
+    v.pose = make_transform2(k % 2 == 0 ? 0.0 : 1.0, k < 2 ? 0.0 : 1.0, 0.5 * k);
+    v.fixed = k == 0;
+    planar.vertices.push_back(v);
+  }
+  for (std::size_t k = 0; k < 4; ++k) {
+    io::G2oEdge<2> e;
+    e.from = k;
+    e.to = (k + 1) % 4;
+    e.measurement = planar.vertices[k].pose.inverse() * planar.vertices[e.to].pose;
+    e.information.diagonal() << 100, 100, 400;
+    e.information(0, 1) = e.information(1, 0) = 5;
+    planar.edges.push_back(e);
+  }
+  std::ostringstream out2;
+  io::write_g2o(out2, planar);
+  write_text(dir / "loop2d.g2o", out2.str());
+  write_gzip_copy(dir / "loop2d.g2o", out2.str());
+  io::G2oGraph<3> spatial;
+  for (int k = 0; k < 3; ++k) {
+    io::G2oVertex<3> v;
+    v.id = 10 + k;
+    v.pose = Transform3d::Identity();
+    v.pose.rotate(Eigen::AngleAxisd(0.3 * k, Eigen::Vector3d(0.1, 0.2, 1).normalized()));
+    v.pose.translation() = Eigen::Vector3d(k, 0.5 * k, 0.1);
+    spatial.vertices.push_back(v);
+  }
+  for (std::size_t k = 0; k + 1 < 3; ++k) {
+    io::G2oEdge<3> e;
+    e.from = k;
+    e.to = k + 1;
+    e.measurement = spatial.vertices[k].pose.inverse() * spatial.vertices[k + 1].pose;
+    spatial.edges.push_back(e);
+  }
+  std::ostringstream out3;
+  io::write_g2o(out3, spatial);
+  write_text(dir / "chain3d.g2o", out3.str());
+  // Edges only (as CSAIL.g2o): the reader chains the vertices.
+  write_text(dir / "edges_only.g2o",
+             "EDGE_SE2 0 1 1 0 0 10 0 0 10 0 10\nEDGE_SE2 1 2 1 0 1.57 10 0 0 10 0 10\n"
+             "EDGE_SE2 2 0 -1 1 -1.57 1 0 0 1 0 1\nFIX 0\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -226,5 +275,6 @@ int main(int argc, char** argv) {
   relations_seeds(dir("slam_relations"));
   mrpt_seeds(dir("mrpt_pose"));
   world_seeds(dir("world"));
+  g2o_seeds(dir("g2o"));
   return 0;
 }
