@@ -28,6 +28,8 @@
 #include <cstdint>
 #include <numbers>
 #include <span>
+#include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -237,6 +239,9 @@ static_assert(VirtualMapPolicy<StructureMapPolicy, float>);
 /// Layout and ageing of a virtual map.
 template <std::floating_point Scalar = double>
 struct VirtualMapParams {
+  /// The most bins a map may have (2^20: 1.2 arcseconds over a full turn).
+  static constexpr std::size_t max_bins = std::size_t{1} << 20;
+
   /// Θ, rad, in (0, 2 pi]; the bins span [-Θ/2, Θ/2) around the robot's heading.
   Scalar aperture{2 * std::numbers::pi_v<Scalar>};
   /// Δθ, rad; N = round(Θ / Δθ) bins, each Θ / N wide (0.5 deg: 720 bins over 360 deg).
@@ -266,6 +271,12 @@ struct VirtualMapParams {
       detail::throw_invalid_argument(
           where, "resolution", resolution,
           "must not exceed the aperture " + detail::format_value(aperture));
+    // Checked before the bin count is rounded and allocated: 1e-9 rad would ask for 6e9 bins.
+    if (!(aperture / resolution <= static_cast<Scalar>(max_bins)))
+      detail::throw_invalid_argument(where, "resolution", resolution,
+                                     "gives more than " + std::to_string(max_bins) +
+                                         " bins over the aperture " +
+                                         detail::format_value(aperture));
     detail::require_positive(where, "max_range", max_range);
     detail::require_non_negative(where, "blind_range", blind_range);
   }
@@ -381,7 +392,9 @@ class VirtualMap {
   /// Eq. (4) with Δθ = -motion.theta and (Δx, Δy) = -R(Δθ) (motion.x, motion.y). Points whose
   /// count of transformations exceeds max_age become dummies. Nothing happens when the motion is
   /// exactly zero (the robot did not move).
+  /// Throws invalid_argument for a non-finite motion (it would turn every point into NaN).
   VirtualMapUpdateStats transform(const Pose2<Scalar>& motion) {
+    require_finite_motion(motion, "VirtualMap::transform");
     VirtualMapUpdateStats stats = transform_bins(motion);
     refresh();
     return stats;
@@ -398,16 +411,20 @@ class VirtualMap {
   }
 
   /// Step 3 of §4.4 for a 2D scan from a planar sensor mounted at `mount` (its valid readings
-  /// only; the scan's range_max and the map's max_range both limit them).
+  /// only; the scan's range_max and the map's max_range both limit them). Throws
+  /// invalid_argument for a non-finite mounting.
   std::size_t insert(const LaserScan<Scalar>& scan, const PlanarMount<Scalar>& mount = {}) {
+    require_finite_mount(mount, "VirtualMap::insert");
     const std::size_t written = insert_bins(scan, mount);
     refresh();
     return written;
   }
 
   /// The whole procedure of §4.4: transform by `motion` (skipped when zero), age out, insert.
+  /// Throws invalid_argument as transform() and insert() do.
   template <class Readings>
   VirtualMapUpdateStats update(const Pose2<Scalar>& motion, const Readings& readings) {
+    require_finite_motion(motion, "VirtualMap::update");
     VirtualMapUpdateStats stats = transform_bins(motion);
     stats.replaced = insert_bins(readings);
     refresh();
@@ -416,6 +433,8 @@ class VirtualMap {
   /// As update(motion, readings) for a planar scan from a sensor mounted at `mount`.
   VirtualMapUpdateStats update(const Pose2<Scalar>& motion, const LaserScan<Scalar>& scan,
                                const PlanarMount<Scalar>& mount) {
+    require_finite_motion(motion, "VirtualMap::update");
+    require_finite_mount(mount, "VirtualMap::update");
     VirtualMapUpdateStats stats = transform_bins(motion);
     stats.replaced = insert_bins(scan, mount);
     refresh();
@@ -435,6 +454,18 @@ class VirtualMap {
   }
 
  private:
+  static void require_finite_motion(const Pose2<Scalar>& motion, std::string_view where) {
+    detail::require_finite(where, "motion.x", motion.x);
+    detail::require_finite(where, "motion.y", motion.y);
+    detail::require_finite(where, "motion.theta", motion.theta);
+  }
+  static void require_finite_mount(const PlanarMount<Scalar>& mount, std::string_view where) {
+    detail::require_finite(where, "mount.pose.x", mount.pose.x);
+    detail::require_finite(where, "mount.pose.y", mount.pose.y);
+    detail::require_finite(where, "mount.pose.theta", mount.pose.theta);
+    detail::require_finite(where, "mount.height", mount.height);
+  }
+
   VirtualMapUpdateStats transform_bins(const Pose2<Scalar>& motion) {
     VirtualMapUpdateStats stats;
     if (motion.x == Scalar(0) && motion.y == Scalar(0) && motion.theta == Scalar(0)) return stats;

@@ -184,12 +184,10 @@ class CarmenReader {
     double value = -std::numeric_limits<double>::infinity();  ///< largest reading so far
     std::size_t evidence = 0;  ///< scans at distinct poses with `value` on >= 2 beams
     std::optional<Pose2d> last_pose;
-    bool seen = false;  ///< a record of this laser has been read
 
     [[nodiscard]] bool recognised(std::size_t needed) const { return evidence >= needed; }
 
     void observe(const std::vector<double>& ranges, const std::optional<Pose2d>& pose) {
-      seen = true;
       double top = -std::numeric_limits<double>::infinity();
       std::size_t hits = 0;
       for (const double r : ranges) {

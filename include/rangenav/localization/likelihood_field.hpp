@@ -73,9 +73,14 @@ inline void squared_distance_1d(float* f, std::size_t n, std::size_t stride, std
 /// to the nearest set cell; +inf everywhere when no cell is set.
 [[nodiscard]] inline std::vector<float> squared_distance_transform(
     const std::vector<std::uint8_t>& mask, std::size_t width, std::size_t height) {
-  if (mask.size() != width * height)
-    detail::throw_invalid_argument("squared_distance_transform", "mask.size()", mask.size(),
-                                   "must equal width * height = " + std::to_string(width * height));
+  // width * height must not wrap around to mask.size().
+  const bool wraps = height != 0 && width > std::numeric_limits<std::size_t>::max() / height;
+  if (wraps || mask.size() != width * height)
+    detail::throw_invalid_argument(
+        "squared_distance_transform", "mask.size()", mask.size(),
+        "must equal width * height = " +
+            (wraps ? std::to_string(width) + " * " + std::to_string(height) + " (overflows)"
+                   : std::to_string(width * height)));
   std::vector<float> f(mask.size());
   for (std::size_t i = 0; i < mask.size(); ++i)
     f[i] = mask[i] ? 0.0f : std::numeric_limits<float>::infinity();
@@ -198,9 +203,12 @@ class LikelihoodFieldModel {
   }
 
   /// Prepares a scan taken by a sensor at `sensor_pose` in the robot frame into `out` (its buffer
-  /// is reused).
+  /// is reused). Throws invalid_argument for a non-finite sensor pose.
   template <class S>
   void prepare(const LaserScan<S>& scan, const Pose2d& sensor_pose, Observation& out) const {
+    detail::require_finite("LikelihoodFieldModel::prepare", "sensor_pose.x", sensor_pose.x);
+    detail::require_finite("LikelihoodFieldModel::prepare", "sensor_pose.y", sensor_pose.y);
+    detail::require_finite("LikelihoodFieldModel::prepare", "sensor_pose.theta", sensor_pose.theta);
     out.end_points.clear();
     const auto& valid = scan.valid_indices();
     for_each_used_beam(valid.size(), params_, [&](std::size_t k) {

@@ -53,6 +53,23 @@ class OdometryMotionModel {
   /// The parameters.
   [[nodiscard]] const OdometryMotionParams& params() const { return params_; }
 
+  /// Throws invalid_argument naming `where` unless both odometry poses are finite and so is the
+  /// increment between them. The filters call it once per update, before sample() runs in the
+  /// particle loop (which never throws): a NaN reading would otherwise turn every particle NaN.
+  static void validate(const OdometryReading& u, std::string_view where) {
+    const auto finite = [&](std::string_view name, double v) {
+      detail::require_finite(where, name, v);
+    };
+    finite("u.previous.x", u.previous.x);
+    finite("u.previous.y", u.previous.y);
+    finite("u.previous.theta", u.previous.theta);
+    finite("u.current.x", u.current.x);
+    finite("u.current.y", u.current.y);
+    finite("u.current.theta", u.current.theta);
+    if (!std::isfinite(std::hypot(u.current.x - u.previous.x, u.current.y - u.previous.y)))
+      detail::throw_invalid(where, "the odometry increment u.current - u.previous overflows");
+  }
+
   /// A pose drawn from p(x_t | u_t, x_{t-1}) (Table 5.6).
   template <class Engine>
   [[nodiscard]] Pose2d sample(const Pose2d& x, const OdometryReading& u, Engine& rng) const {
