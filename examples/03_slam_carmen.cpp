@@ -161,11 +161,14 @@ int main(int argc, char** argv) try {
   }
   svg.save(out_dir / "map.svg");
 
+  const auto& st = slam.loop_statistics();
   std::cout << "input: " << (log.empty() ? "simulated apartment tour, out and back" : log.string())
             << "\n"
             << slam.key_frames() << " key frames in " << slam.submaps() << " submaps; "
             << slam.loop_closures().size() << " loop closures accepted of " << slam.loop_attempts()
-            << " candidates matched, " << slam.optimizations() << " optimisations\nwrote "
+            << " candidates matched (rejected: " << st.low_score << " low score, " << st.ambiguous
+            << " ambiguous, " << st.icp_failed << " ICP, " << st.disagreed
+            << " ICP and matcher disagree), " << slam.optimizations() << " optimisations\nwrote "
             << (out_dir / "trajectory.txt").string() << " and " << (out_dir / "map.svg").string()
             << "\n";
 

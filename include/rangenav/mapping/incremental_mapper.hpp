@@ -271,15 +271,21 @@ class IncrementalMapper {
     }
     if constexpr (uses_normals) icp.solver.model_normals = map_.normals();
     update.icp = icp.align(map_.search(), finite_, guess);
+    const auto usable = [&](const IcpResult<D, Scalar>& result) {
+      return (result.reason == IcpTermination::converged ||
+              result.reason == IcpTermination::max_iterations ||
+              (result.reason == IcpTermination::degenerate && params.accept_degenerate &&
+               result.smallest_eigenvalue.has_value())) &&
+             result.fitness >= params.min_fitness;
+    };
+    {
+      const auto& r = *update.icp;
+      const transform_type correction = guess.inverse(Eigen::Isometry) * r.transform;
+      const bool plausible = correction.translation().norm() <= params.max_correction_distance &&
+                             std::abs(rotation_angle(correction)) <= params.max_correction_angle;
+      update.registration_accepted = usable(r) && plausible;
+    }
     const auto& r = *update.icp;
-    const bool usable = r.reason == IcpTermination::converged ||
-                        r.reason == IcpTermination::max_iterations ||
-                        (r.reason == IcpTermination::degenerate && params.accept_degenerate &&
-                         r.smallest_eigenvalue.has_value());
-    const transform_type correction = guess.inverse(Eigen::Isometry) * r.transform;
-    const bool plausible = correction.translation().norm() <= params.max_correction_distance &&
-                           std::abs(rotation_angle(correction)) <= params.max_correction_angle;
-    update.registration_accepted = usable && plausible && r.fitness >= params.min_fitness;
     if (update.registration_accepted) {
       update.pose = r.transform;
       if (odometry_information && (!params.fuse_odometry || !odometry_consistent)) {
@@ -295,6 +301,17 @@ class IncrementalMapper {
         if (fused.chi2 <= params.odometry_gate_chi2) {
           update.pose = fused.pose;
           update.odometry_fused = true;
+        } else {
+          // The registration and the odometry disagree, and one of them is wrong (a local
+          // minimum of ICP after a large motion, or odometry that froze): the pose is the
+          // registration's, and its covariance spans the disagreement e (Σ + e eᵀ, the spread
+          // of the two hypotheses), so that the pose graph and the loop search allow for it.
+          const lie::PoseTangent<D, Scalar> e =
+              lie::se_log<D, Scalar>(r.transform.inverse(Eigen::Isometry) * update.initial_guess);
+          const lie::PoseMatrix<D, Scalar> cov =
+              fused.information.ldlt().solve(lie::PoseMatrix<D, Scalar>::Identity()) +
+              e * e.transpose();
+          if (cov.allFinite()) update.information = cov.inverse().eval();
         }
       }
     } else if (update.previous_scan_guess) {

@@ -149,6 +149,16 @@ struct LoopClosure {
   Scalar fitness = 0;  ///< the refining ICP's
 };
 
+/// Why loop candidates were rejected (counts over the run).
+struct LoopStatistics {
+  std::size_t candidates = 0;  ///< submaps matched against a key frame
+  std::size_t low_score = 0;   ///< no pose reached min_score (2D)
+  std::size_t ambiguous = 0;   ///< a distinct pose scored nearly as well (2D)
+  std::size_t icp_failed = 0;  ///< the refining ICP did not converge or paired too little
+  std::size_t disagreed = 0;   ///< the ICP moved too far from the matcher's pose / the window
+  std::size_t accepted = 0;    ///< loop edges added
+};
+
 /// What the SLAM did with one scan.
 template <int D, class Scalar = double>
 struct SlamUpdate {
@@ -184,8 +194,16 @@ class LoopClosingMapper {
     SlamUpdate<D, Scalar> update;
     update.front_end = front_end_.process(scan, odometry);
     update.pose = update.front_end.pose;
-    if (update.front_end.key_frame) {
-      update.node = add_key_frame(update.front_end);
+    const auto& fe = update.front_end;
+    if (fe.icp) failures_ = fe.registration_accepted ? 0 : failures_ + 1;
+    // Lost: the registration failed twice in a row and the robot has moved a key frame's
+    // distance since the last key frame. The scan becomes a key frame at the odometry's pose
+    // (its edge carries the odometry's covariance) and starts a new submap and a fresh local
+    // map, so tracking resumes from it; loop closure later ties the pieces together.
+    const bool lost = !fe.key_frame && failures_ >= 2 && !nodes_.empty() &&
+                      !front_end_.last_points().empty() && moved_a_key_frame(fe.pose);
+    if (fe.key_frame || lost) {
+      update.node = add_key_frame(update.front_end, lost);
       if (loops_.enabled) update.loop_closures = close_loops(*update.node);
       if (needs_optimization_) {
         optimize();
@@ -242,7 +260,9 @@ class LoopClosingMapper {
     return loop_closures_;
   }
   /// Loop candidates matched (each a correlative search in 2D, an ICP in 3D).
-  [[nodiscard]] std::size_t loop_attempts() const { return attempts_; }
+  [[nodiscard]] std::size_t loop_attempts() const { return stats_.candidates; }
+  /// What became of the loop candidates.
+  [[nodiscard]] const LoopStatistics& loop_statistics() const { return stats_; }
   [[nodiscard]] std::size_t optimizations() const { return optimizations_; }
   [[nodiscard]] std::size_t key_frames() const { return nodes_.size(); }
   [[nodiscard]] std::size_t submaps() const { return submaps_.size(); }
@@ -280,8 +300,20 @@ class LoopClosingMapper {
     return p;
   }
 
-  std::size_t add_key_frame(const MapperUpdate<D, Scalar>& u) {
+  bool moved_a_key_frame(const transform_type& pose) const {
+    const auto& kf = front_end_.params.key_frames;
+    const transform_type delta = nodes_.back().pose.inverse(Eigen::Isometry) * pose;
+    return delta.translation().norm() > kf.min_distance ||
+           std::abs(rotation_angle(delta)) > kf.min_angle;
+  }
+
+  std::size_t add_key_frame(const MapperUpdate<D, Scalar>& u, bool restart = false) {
     const std::size_t k = nodes_.size();
+    if (restart) {
+      if (!submaps_.empty() && !submaps_.back().map) finish_submap(submaps_.size() - 1, false);
+      restarted_ = true;
+      failures_ = 0;
+    }
     const std::size_t submap =
         submaps_.empty() || submaps_.back().map ? submaps_.size() : submaps_.size() - 1;
     if (submap == submaps_.size()) {
@@ -306,13 +338,17 @@ class LoopClosingMapper {
           lie::se_adjoint<D, Scalar>(step.inverse(Eigen::Isometry));
       accumulated_ = ad * accumulated_ * ad.transpose() + cov;
     }
+    if (restart) {
+      front_end_.clear_map();
+      front_end_.add_to_map(nodes_[k].points, nodes_[k].pose);
+    }
     if (submaps_[submap].count >= loops_.submap_key_frames) finish_submap(submap);
     return k;
   }
 
   // Builds the finished submap's sparse map and makes the front end's local map that submap
   // (the current one is empty: it starts with the next key frame).
-  void finish_submap(std::size_t index) {
+  void finish_submap(std::size_t index, bool track = true) {
     Submap& s = submaps_[index];
     auto params = front_end_.map().params();
     params.normals = true;
@@ -320,16 +356,25 @@ class LoopClosingMapper {
     const transform_type to_anchor = nodes_[s.anchor].pose.inverse(Eigen::Isometry);
     for (std::size_t k = s.first; k < s.first + s.count; ++k)
       s.map->insert(nodes_[k].points, to_anchor * nodes_[k].pose);
+    if (!track) return;
+    restarted_ = false;
     rebuild_local_map();
   }
 
   // The front end's map: the last finished submap and the current one, at the current poses.
+  // After a restart (lost) the finished submap before it is left out until the next one
+  // finishes: it is tied to the current one by odometry alone.
   void rebuild_local_map() {
     front_end_.clear_map();
     std::size_t first = nodes_.size();
+    tracked_ = submaps_.size();
     for (std::size_t i = submaps_.size(); i-- > 0;) {
+      if (submaps_[i].map && restarted_) break;
       first = submaps_[i].first;
-      if (submaps_[i].map) break;
+      if (submaps_[i].map) {
+        tracked_ = i;
+        break;
+      }
     }
     for (std::size_t k = first; k < nodes_.size(); ++k)
       front_end_.add_to_map(nodes_[k].points, nodes_[k].pose);
@@ -340,18 +385,12 @@ class LoopClosingMapper {
   std::size_t close_loops(std::size_t k) {
     const Node& node = nodes_[k];
     const auto window = search_window();
-    // Candidates: finished submaps, not the one the front end tracks against (the newest
-    // finished), with a key frame near enough.
+    // Candidates: finished submaps, not the one the front end tracks against, with a key frame
+    // near enough.
     std::vector<std::pair<Scalar, std::size_t>> candidates;
-    std::size_t newest_finished = submaps_.size();
-    for (std::size_t i = submaps_.size(); i-- > 0;)
-      if (submaps_[i].map) {
-        newest_finished = i;
-        break;
-      }
     for (std::size_t i = 0; i < submaps_.size(); ++i) {
       const Submap& s = submaps_[i];
-      if (!s.map || i == newest_finished || i == node.submap) continue;
+      if (!s.map || i == tracked_ || i == node.submap) continue;
       Scalar nearest = std::numeric_limits<Scalar>::infinity();
       for (std::size_t j = s.first; j < s.first + s.count; ++j)
         nearest =
@@ -362,11 +401,12 @@ class LoopClosingMapper {
     if (candidates.size() > loops_.max_candidates) candidates.resize(loops_.max_candidates);
     std::size_t added = 0;
     for (const auto& [distance, i] : candidates) {
-      ++attempts_;
+      ++stats_.candidates;
       auto closure = verify(i, k, window);
       if (!closure) continue;
       const Scalar chi2 = add_loop_edge(*closure);
       loop_closures_.push_back(*closure);
+      ++stats_.accepted;
       ++added;
       ++pending_loops_;
       // A constraint the estimate already satisfies changes nothing now; one it violates calls
@@ -415,32 +455,45 @@ class LoopClosingMapper {
         release_matchers();
       }
       const auto best = s.matcher->match(node.points, predicted, window, loops_.min_score);
-      if (!best) return std::nullopt;
+      if (!best) {
+        ++stats_.low_score;
+        return std::nullopt;
+      }
       // Olson's ambiguity test: no distinct pose may score nearly as well.
       const auto second =
           s.matcher->match(node.points, predicted, window, loops_.ambiguity_ratio * best->score,
                            SearchExclusion<Scalar>{best->pose, loops_.ambiguity_distance});
-      if (second) return std::nullopt;
+      if (second) {
+        ++stats_.ambiguous;
+        return std::nullopt;
+      }
       start = best->pose;
       closure.score = best->score;
     }
     if constexpr (front_end_type::uses_normals) verify_icp_.solver.model_normals = s.map->normals();
     const auto r = verify_icp_.align(s.map->search(), node.points, start);
     if (!(r.reason == IcpTermination::converged || r.reason == IcpTermination::max_iterations) ||
-        r.fitness < loops_.min_fitness)
+        r.fitness < loops_.min_fitness) {
+      ++stats_.icp_failed;
       return std::nullopt;
+    }
     const transform_type moved = start.inverse(Eigen::Isometry) * r.transform;
     const lie::PoseMatrix<D, Scalar> info = loop_information(*s.map, r.transform);
     if constexpr (D == 2) {
       if (moved.translation().norm() > loops_.max_refinement_distance ||
-          std::abs(rotation_angle(moved)) > loops_.max_refinement_angle)
+          std::abs(rotation_angle(moved)) > loops_.max_refinement_angle) {
+        ++stats_.disagreed;
         return std::nullopt;
+      }
     } else {
       // No global search in 3D: the ICP's answer must lie within the window.
       const lie::PoseTangent<D, Scalar> e =
           lie::se_log<D, Scalar>(predicted.inverse(Eigen::Isometry) * r.transform);
-      if (e.template head<D>().norm() > window.linear) return std::nullopt;
-      if (e.template tail<dof - D>().norm() > window.angular) return std::nullopt;
+      if (e.template head<D>().norm() > window.linear ||
+          e.template tail<dof - D>().norm() > window.angular) {
+        ++stats_.disagreed;
+        return std::nullopt;
+      }
     }
     closure.submap = submap;
     closure.anchor = s.anchor;
@@ -521,7 +574,11 @@ class LoopClosingMapper {
   std::vector<ScanRecord> scans_;
   std::vector<LoopClosure<D, Scalar>> loop_closures_;
   lie::PoseMatrix<D, Scalar> accumulated_ = lie::PoseMatrix<D, Scalar>::Zero();
-  std::size_t attempts_ = 0, optimizations_ = 0, pending_loops_ = 0, clock_ = 0;
+  LoopStatistics stats_{};
+  std::size_t failures_ = 0;  ///< consecutive failed registrations
+  std::size_t tracked_ = std::numeric_limits<std::size_t>::max();  ///< submap in the local map
+  bool restarted_ = false;  ///< lost since the last finished submap
+  std::size_t optimizations_ = 0, pending_loops_ = 0, clock_ = 0;
   bool needs_optimization_ = false;
 };
 

@@ -221,6 +221,17 @@ class CorrelativeScanMatcher {
     return m;
   }
 
+  /// Eq. (9) at one pose: the mean likelihood of `scan`'s points (thinned as by match()) placed
+  /// by `pose` (scan -> model); 0 for a scan without a finite point.
+  [[nodiscard]] Scalar score(std::span<const point_type> scan, const transform_type& pose) const {
+    thin(scan);
+    if (points_.empty()) return 0;
+    Scalar sum = 0;
+    for (const auto& p : points_)
+      sum += likelihood(pose * p);
+    return sum / static_cast<Scalar>(points_.size());
+  }
+
   /// The likelihood (level 0) at a point of the model frame; 0 outside the grid.
   [[nodiscard]] Scalar likelihood(const point_type& p) const {
     return value(0, static_cast<int>(std::floor((p.x() - origin_.x()) / params_.resolution)),
