@@ -81,6 +81,31 @@ inline SimulatedRun drive(const sim::World& world, Pose2d start,
   return run;
 }
 
+/// A 3D range scan of `world` from a sensor 0.5 m above the robot at `pose`: 8 rings of 180
+/// beams (every 2°) at elevations from -20° to +15°, ranges to 20 m with 1 cm noise, in the
+/// robot frame (z up).
+template <class Engine>
+std::vector<Point3d> scan_3d(const sim::World& world, const Pose2d& pose, Engine& rng) {
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::vector<Point3d> points;
+  const Point3d origin(pose.x, pose.y, 0.5);
+  for (int ring = 0; ring < 8; ++ring) {
+    const double elevation = deg_to_rad(-20.0 + 5.0 * ring);
+    for (int beam = 0; beam < 180; ++beam) {
+      const double azimuth = deg_to_rad(2.0 * beam);
+      const Point3d local(std::cos(elevation) * std::cos(azimuth),
+                          std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
+      const Point3d world_dir(std::cos(pose.theta) * local.x() - std::sin(pose.theta) * local.y(),
+                              std::sin(pose.theta) * local.x() + std::cos(pose.theta) * local.y(),
+                              local.z());
+      const auto hit = world.cast_ray(origin, world_dir, 20.0);
+      if (!(hit.range < 20.0)) continue;
+      points.push_back(local * (hit.range + noise(rng)) + Point3d(0, 0, 0.5));
+    }
+  }
+  return points;
+}
+
 /// Once and a third around ring_corridor() counter-clockwise from (1, 1), facing east.
 inline SimulatedRun ring_run(double scale_error = 0.03, double heading_drift = 0.01) {
   return drive(ring_corridor(), {1.0, 1.0, 0.0},
