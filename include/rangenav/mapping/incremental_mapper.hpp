@@ -288,19 +288,18 @@ class IncrementalMapper {
     const auto& r = *update.icp;
     if (update.registration_accepted) {
       update.pose = r.transform;
-      if (odometry_information && (!params.fuse_odometry || !odometry_consistent)) {
-        update.information = (information_of(r.transform) + *odometry_information).eval();
-      } else if (odometry_information) {
+      if (odometry_information) {
         const lie::PoseMatrix<D, Scalar> info = information_of(r.transform);
         const auto fused =
             complete<D, Scalar>(r.transform, info, update.initial_guess, *odometry_information);
-        // Odometry that disagrees (froze, then jumped) is not averaged into the match; the
-        // information stays the sum either way (along what the scan leaves free, the pose is
-        // no better known than the odometry says).
+        // The information is the sum either way: along what the scan leaves free, the pose is
+        // no better known than the odometry says.
         update.information = fused.information;
         if (fused.chi2 <= params.odometry_gate_chi2) {
-          update.pose = fused.pose;
-          update.odometry_fused = true;
+          if (params.fuse_odometry && odometry_consistent) {
+            update.pose = fused.pose;
+            update.odometry_fused = true;
+          }
         } else {
           // The registration and the odometry disagree, and one of them is wrong (a local
           // minimum of ICP after a large motion, or odometry that froze): the pose is the

@@ -290,6 +290,8 @@ class LoopClosingMapper {
     /// Covariance of the submap's last key frame relative to its anchor (the chain's steps
     /// propagated): how far the submap's own points may be off in the anchor's frame.
     lie::PoseMatrix<D, Scalar> internal = lie::PoseMatrix<D, Scalar>::Zero();
+    /// Where a key frame last failed to close a loop with this submap (map frame).
+    std::optional<point_type> failed_at;
     std::unique_ptr<CorrelativeScanMatcher<Scalar>> matcher;  ///< built on first use (2D)
     std::size_t last_used = 0;
   };
@@ -402,6 +404,11 @@ class LoopClosingMapper {
       for (std::size_t j = s.first; j < s.first + s.count; ++j)
         nearest =
             std::min(nearest, (nodes_[j].pose.translation() - node.pose.translation()).norm());
+      // A key frame close to one that just failed against this submap sees what that one saw:
+      // it is skipped until the robot has moved half the overlap distance.
+      if (s.failed_at &&
+          (*s.failed_at - node.pose.translation()).norm() < loops_.overlap_distance / 2)
+        continue;
       if (nearest <= window.linear + loops_.overlap_distance) candidates.push_back({nearest, i});
     }
     std::sort(candidates.begin(), candidates.end());
@@ -410,7 +417,11 @@ class LoopClosingMapper {
     for (const auto& [distance, i] : candidates) {
       ++stats_.candidates;
       auto closure = verify(i, k, window);
-      if (!closure) continue;
+      submaps_[i].failed_at.reset();
+      if (!closure) {
+        submaps_[i].failed_at = node.pose.translation();
+        continue;
+      }
       const Scalar chi2 = add_loop_edge(*closure);
       loop_closures_.push_back(*closure);
       ++stats_.accepted;
