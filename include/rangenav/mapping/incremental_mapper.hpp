@@ -432,7 +432,6 @@ template <std::floating_point Scalar = double>
   p.key_frames.min_angle = Scalar(10) * std::numbers::pi_v<Scalar> / 180;
   p.max_correction_distance = Scalar(0.5);
   p.max_correction_angle = Scalar(3) * std::numbers::pi_v<Scalar> / 180;
-  p.odometry_noise = OdometryNoise<Scalar>{};
   return p;
 }
 

@@ -607,7 +607,7 @@ class LoopClosingMapper {
 };
 
 /// Loop-closing 2D laser SLAM in its one default configuration: the front end of
-/// laser_slam_params() (with its odometry noise model) and LoopClosureParams' defaults.
+/// laser_slam_params() with the default OdometryNoise model, and LoopClosureParams' defaults.
 template <std::floating_point Scalar = double>
 class LaserSlam : public LoopClosingMapper<2, Scalar, LaserIcp<Scalar>> {
  public:

@@ -113,7 +113,8 @@ class CorrelativeScanMatcher {
     height_ = static_cast<int>(std::ceil((hi_y - origin_.y()) / r)) + reach + 2;
     pad_ = (1 << (params_.levels - 1)) - 1;
     stride_ = width_ + pad_;
-    const std::size_t cells = static_cast<std::size_t>(stride_) * (height_ + pad_);
+    const std::size_t cells =
+        static_cast<std::size_t>(stride_) * static_cast<std::size_t>(height_ + pad_);
     grids_.assign(static_cast<std::size_t>(params_.levels), std::vector<float>(cells, 0.0f));
     // Level 0: the likelihood of the nearest model point, splatted over 3σ around each point.
     auto& base = grids_[0];
