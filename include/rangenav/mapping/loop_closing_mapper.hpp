@@ -110,6 +110,7 @@ struct LoopClosureParams {
   /// Residual σ floor of a loop edge's information (m); see IncrementalMapperParams.
   Scalar sensor_sigma = Scalar(0.01);
 
+  /// Throws invalid_argument naming the first parameter out of range.
   void validate() const {
     constexpr std::string_view where = "LoopClosureParams";
     if (submap_key_frames < 2)
@@ -174,11 +175,11 @@ template <int D, std::floating_point Scalar = double, class IcpType = PaperIcp<D
           class Index = DefaultMapIndex<D, Scalar>>
 class LoopClosingMapper {
  public:
-  using transform_type = Transform<D, Scalar>;
-  using point_type = Point<D, Scalar>;
-  using front_end_type = IncrementalMapper<D, Scalar, IcpType, Index>;
-  using map_type = SparsePointMap<D, Scalar, Index>;
-  static constexpr int dof = lie::pose_dof<D>;
+  using transform_type = Transform<D, Scalar>;                          ///< a pose
+  using point_type = Point<D, Scalar>;                                  ///< a point
+  using front_end_type = IncrementalMapper<D, Scalar, IcpType, Index>;  ///< the front end
+  using map_type = SparsePointMap<D, Scalar, Index>;                    ///< a submap's map
+  static constexpr int dof = lie::pose_dof<D>;                          ///< 3 or 6
 
   /// Front end and loop-closure parameters. The front end's odometry_noise is required (set to
   /// the default model when absent): it is what the pose graph's edges are made of.
@@ -256,6 +257,7 @@ class LoopClosingMapper {
     }
     return out;
   }
+  /// The loop edges accepted so far.
   [[nodiscard]] const std::vector<LoopClosure<D, Scalar>>& loop_closures() const {
     return loop_closures_;
   }
@@ -263,12 +265,19 @@ class LoopClosingMapper {
   [[nodiscard]] std::size_t loop_attempts() const { return stats_.candidates; }
   /// What became of the loop candidates.
   [[nodiscard]] const LoopStatistics& loop_statistics() const { return stats_; }
+  /// Pose-graph optimisations run so far.
   [[nodiscard]] std::size_t optimizations() const { return optimizations_; }
+  /// Key frames (pose-graph nodes) so far.
   [[nodiscard]] std::size_t key_frames() const { return nodes_.size(); }
+  /// Submaps so far (the last one may be unfinished).
   [[nodiscard]] std::size_t submaps() const { return submaps_.size(); }
+  /// The front end (its pose and map are in the map frame, re-anchored after optimisations).
   [[nodiscard]] const front_end_type& front_end() const { return front_end_; }
+  /// The front end, to configure its ICP policies.
   [[nodiscard]] front_end_type& front_end() { return front_end_; }
+  /// The loop-closure parameters.
   [[nodiscard]] const LoopClosureParams<Scalar>& params() const { return loops_; }
+  /// The pose graph (key frames, chain and loop edges).
   [[nodiscard]] const PoseGraph<D, Scalar>& graph() const { return graph_; }
   /// The uncertainty accumulated since the last loop constraint (covariance of the last key
   /// frame's pose, body frame).
@@ -611,7 +620,9 @@ class LoopClosingMapper {
 template <std::floating_point Scalar = double>
 class LaserSlam : public LoopClosingMapper<2, Scalar, LaserIcp<Scalar>> {
  public:
+  /// The default configuration.
   LaserSlam() : LaserSlam(laser_slam_params<Scalar>(), LoopClosureParams<Scalar>{}) {}
+  /// A configuration of one's own (an absent odometry noise model gets the default one).
   LaserSlam(IncrementalMapperParams<Scalar> front_end, LoopClosureParams<Scalar> loops)
       : LoopClosingMapper<2, Scalar, LaserIcp<Scalar>>(front_end, loops) {}
 };

@@ -51,6 +51,7 @@ struct OdometryNoise {
   Scalar rotation_per_meter = Scalar(std::numbers::pi_v<Scalar> / 180);  ///< rad / m (1°/m)
   Scalar rotation_floor = Scalar(std::numbers::pi_v<Scalar> / 180);      ///< rad (1°)
 
+  /// Throws invalid_argument naming the first parameter out of range.
   void validate() const {
     constexpr std::string_view where = "OdometryNoise";
     detail::require_non_negative(where, "translation_per_meter", translation_per_meter);
@@ -134,8 +135,8 @@ template <int D, class Scalar, class Model>
 /// Two estimates of one pose fused by their information (see the file comment).
 template <int D, class Scalar>
 struct FusedPose {
-  Transform<D, Scalar> pose;
-  lie::PoseMatrix<D, Scalar> information;
+  Transform<D, Scalar> pose;               ///< the fused pose
+  lie::PoseMatrix<D, Scalar> information;  ///< its information (the sum of both)
   /// Squared Mahalanobis distance between the two estimates under their summed covariance
   /// (χ² with lie::pose_dof<D> degrees of freedom when both are right); +inf when undetermined.
   Scalar chi2 = 0;

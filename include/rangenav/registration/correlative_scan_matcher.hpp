@@ -53,6 +53,7 @@ struct CorrelativeScanMatcherParams {
   /// Heights of precomputed grids (Hess et al. use 7: a root node covers 2^6 = 64 cells).
   int levels = 7;
 
+  /// Throws invalid_argument naming the first parameter out of range.
   void validate() const {
     constexpr std::string_view where = "CorrelativeScanMatcherParams";
     detail::require_positive(where, "resolution", resolution);
@@ -65,22 +66,22 @@ struct CorrelativeScanMatcherParams {
 /// The region searched around an initial pose: ±linear in x and y (m), ±angular (rad).
 template <std::floating_point Scalar = double>
 struct SearchWindow {
-  Scalar linear = Scalar(1);
-  Scalar angular = Scalar(0.5);
+  Scalar linear = Scalar(1);     ///< m, half-width in x and in y
+  Scalar angular = Scalar(0.5);  ///< rad, half-width in θ
 };
 
 /// A region of translations a search leaves out: those within `radius` (m) of `center`'s.
 template <std::floating_point Scalar = double>
 struct SearchExclusion {
-  Transform<2, Scalar> center = Transform<2, Scalar>::Identity();
-  Scalar radius = 0;
+  Transform<2, Scalar> center = Transform<2, Scalar>::Identity();  ///< its translation counts
+  Scalar radius = 0;                                               ///< m
 };
 
 /// The best pose found and its score (Eq. (9), in [0, 1]).
 template <std::floating_point Scalar = double>
 struct CorrelativeMatch {
   Transform<2, Scalar> pose = Transform<2, Scalar>::Identity();  ///< scan -> model frame
-  Scalar score = 0;
+  Scalar score = 0;        ///< Eq. (9), mean likelihood in [0, 1]
   std::size_t points = 0;  ///< scan points scored (one per grid cell)
 };
 
@@ -88,8 +89,8 @@ struct CorrelativeMatch {
 template <std::floating_point Scalar = double>
 class CorrelativeScanMatcher {
  public:
-  using point_type = Point<2, Scalar>;
-  using transform_type = Transform<2, Scalar>;
+  using point_type = Point<2, Scalar>;          ///< a point
+  using transform_type = Transform<2, Scalar>;  ///< a pose
 
   /// Rasterises the finite points of `model` (in the model frame). Throws invalid_argument for
   /// invalid parameters or a model without a finite point.
