@@ -124,6 +124,13 @@ TEST_CASE("CorrelativeScanMatcher sees a look-alike place as a second peak", "[m
   const auto second = matcher.match(data, predicted, window, 0.8 * best->score,
                                     rangenav::SearchExclusion<double>{best->pose, 1.0});
   CHECK(second);
+  // The one-pass form finds the same two peaks.
+  const auto [best2, second2] =
+      matcher.match_with_runner_up(data, predicted, window, 0.3, 0.8, 1.0);
+  REQUIRE(best2);
+  REQUIRE(second2);
+  CHECK(best2->score == Approx(best->score).epsilon(1e-5));
+  CHECK(second2->score == Approx(second->score).epsilon(1e-5));
 }
 
 TEST_CASE("Registration information: a corridor leaves its axis to the odometry",

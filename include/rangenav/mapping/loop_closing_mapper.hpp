@@ -481,15 +481,14 @@ class LoopClosingMapper {
             std::span<const point_type>(s.map->points()), loops_.matcher);
         release_matchers();
       }
-      const auto best = s.matcher->match(node.points, predicted, window, loops_.min_score);
+      // Olson's ambiguity test: no distinct pose may score nearly as well.
+      const auto [best, second] =
+          s.matcher->match_with_runner_up(node.points, predicted, window, loops_.min_score,
+                                          loops_.ambiguity_ratio, loops_.ambiguity_distance);
       if (!best) {
         ++stats_.low_score;
         return std::nullopt;
       }
-      // Olson's ambiguity test: no distinct pose may score nearly as well.
-      const auto second =
-          s.matcher->match(node.points, predicted, window, loops_.ambiguity_ratio * best->score,
-                           SearchExclusion<Scalar>{best->pose, loops_.ambiguity_distance});
       if (second) {
         ++stats_.ambiguous;
         return std::nullopt;

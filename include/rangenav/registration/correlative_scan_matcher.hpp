@@ -23,6 +23,7 @@
 // The grid is two-dimensional only: 3D loop closures are verified by ICP alone.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
@@ -32,6 +33,7 @@
 #include <optional>
 #include <span>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "rangenav/core/error.hpp"
@@ -161,66 +163,23 @@ class CorrelativeScanMatcher {
       std::span<const point_type> scan, const transform_type& initial,
       const SearchWindow<Scalar>& window, Scalar min_score,
       const std::optional<SearchExclusion<Scalar>>& exclusion = std::nullopt) const {
-    const Scalar r = params_.resolution;
-    thin(scan);
-    if (points_.empty() || !initial.matrix().allFinite() || !(window.linear >= 0) ||
-        !(window.angular >= 0))
-      return std::nullopt;
-    // Eq. (7) with d_max the 90 % quantile of the points' ranges instead of the farthest: one
-    // far reading would otherwise set the step for all, while a step moves 90 % of the points
-    // by at most a cell (and the refining ICP absorbs the rest); at least a tenth of a degree.
-    ranges_.clear();
-    for (const auto& p : points_)
-      ranges_.push_back(p.norm());
-    const auto q = ranges_.begin() + static_cast<std::ptrdiff_t>(ranges_.size() * 9 / 10);
-    std::nth_element(ranges_.begin(), q, ranges_.end());
-    const Scalar d_max = *q;
-    const Scalar step =
-        std::max(std::acos(std::clamp(1 - r * r / (2 * std::max(d_max * d_max, r * r)), Scalar(-1),
-                                      Scalar(1))),
-                 Scalar(std::numbers::pi_v<Scalar> / 1800));
-    const int angles =
-        static_cast<int>(std::ceil(std::min(window.angular, std::numbers::pi_v<Scalar>) / step));
-    const int wx = static_cast<int>(std::ceil(window.linear / r));
-    const Scalar theta0 = std::atan2(initial.linear()(1, 0), initial.linear()(0, 0));
-    const point_type t0 = initial.translation();
-    exclusion_ = exclusion;
-    if (exclusion_) {  // in cell offsets from t0
-      exclusion_->center.translation() = (exclusion_->center.translation() - t0) / r;
-      exclusion_->radius /= r;
-    }
+    if (!prepare(scan, initial, window)) return std::nullopt;
+    return run(min_score, exclusion);
+  }
 
-    // Discretised scans, one per angle (Hess et al.'s precomputed rotated scans).
-    const std::size_t n = points_.size();
-    cells_.resize(static_cast<std::size_t>(2 * angles + 1) * n);
-    for (int a = -angles; a <= angles; ++a) {
-      const Scalar theta = theta0 + Scalar(a) * step;
-      const Scalar c = std::cos(theta), s = std::sin(theta);
-      for (std::size_t k = 0; k < n; ++k) {
-        const point_type& p = points_[k];
-        const Scalar x = c * p.x() - s * p.y() + t0.x(), y = s * p.x() + c * p.y() + t0.y();
-        cells_[static_cast<std::size_t>(a + angles) * n + k] = {
-            static_cast<int>(std::floor((x - origin_.x()) / r)),
-            static_cast<int>(std::floor((y - origin_.y()) / r))};
-      }
-    }
-    const int top = params_.levels - 1;
-    std::vector<Candidate> roots;
-    for (int a = -angles; a <= angles; ++a)
-      for (int x = -wx; x <= wx; x += 1 << top)
-        for (int y = -wx; y <= wx; y += 1 << top)
-          roots.push_back({a + angles, x, y, score(top, a + angles, x, y)});
-    std::sort(roots.begin(), roots.end(), by_score);
-    Candidate best{0, 0, 0, static_cast<float>(min_score) * static_cast<float>(n)};
-    bool found = false;
-    search(roots, top, wx, best, found);
-    if (!found) return std::nullopt;
-    CorrelativeMatch<Scalar> m;
-    const Scalar theta = theta0 + Scalar(best.angle - angles) * step;
-    m.pose = make_transform2(t0.x() + Scalar(best.x) * r, t0.y() + Scalar(best.y) * r, theta);
-    m.score = static_cast<Scalar>(best.score) / static_cast<Scalar>(n);
-    m.points = n;
-    return m;
+  /// The best match as match() finds it, and the best pose farther than `distance` (m) from it
+  /// that scores at least `ratio` × its score (Olson 2009 §IV: a second peak nearly as high
+  /// makes the match ambiguous), both from one set of rotated scans and root bounds.
+  [[nodiscard]] std::pair<std::optional<CorrelativeMatch<Scalar>>,
+                          std::optional<CorrelativeMatch<Scalar>>>
+  match_with_runner_up(std::span<const point_type> scan, const transform_type& initial,
+                       const SearchWindow<Scalar>& window, Scalar min_score, Scalar ratio,
+                       Scalar distance) const {
+    if (!prepare(scan, initial, window)) return {};
+    auto best = run(min_score, std::nullopt);
+    if (!best) return {};
+    auto second = run(ratio * best->score, SearchExclusion<Scalar>{best->pose, distance});
+    return {best, second};
   }
 
   /// Eq. (9) at one pose: the mean likelihood of `scan`'s points (thinned as by match()) placed
@@ -263,37 +222,140 @@ class CorrelativeScanMatcher {
     if (x < -pad_ || y < -pad_ || x >= width_ || y >= height_) return 0.0f;
     return grids_[static_cast<std::size_t>(level)][index(x, y)];
   }
+
+  // The rotated, discretised scans of the window (Hess et al.'s precomputed rotated scans) and
+  // the sorted root nodes; false when there is nothing to search.
+  bool prepare(std::span<const point_type> scan, const transform_type& initial,
+               const SearchWindow<Scalar>& window) const {
+    const Scalar r = params_.resolution;
+    thin(scan);
+    if (points_.empty() || !initial.matrix().allFinite() || !(window.linear >= 0) ||
+        !(window.angular >= 0))
+      return false;
+    // Eq. (7) with d_max the 90 % quantile of the points' ranges instead of the farthest: one
+    // far reading would otherwise set the step for all, while a step moves 90 % of the points
+    // by at most a cell (and the refining ICP absorbs the rest); at least a tenth of a degree.
+    ranges_.clear();
+    for (const auto& p : points_)
+      ranges_.push_back(p.norm());
+    const auto q = ranges_.begin() + static_cast<std::ptrdiff_t>(ranges_.size() * 9 / 10);
+    std::nth_element(ranges_.begin(), q, ranges_.end());
+    const Scalar d_max = *q;
+    step_ = std::max(std::acos(std::clamp(1 - r * r / (2 * std::max(d_max * d_max, r * r)),
+                                          Scalar(-1), Scalar(1))),
+                     Scalar(std::numbers::pi_v<Scalar> / 1800));
+    angles_ =
+        static_cast<int>(std::ceil(std::min(window.angular, std::numbers::pi_v<Scalar>) / step_));
+    wx_ = static_cast<int>(std::min(std::ceil(window.linear / r), Scalar(1 << 20)));
+    theta0_ = std::atan2(initial.linear()(1, 0), initial.linear()(0, 0));
+    t0_ = initial.translation();
+
+    // Per angle, the scan's cells split by what the window's offsets [-w, w] do to them: a cell
+    // outside the grid for every offset adds 0 to every bound and is dropped; one inside for
+    // every offset is kept as its linear index (no bounds test in the search's inner loop);
+    // the rest are tested per node.
+    const std::size_t n = points_.size();
+    const auto angle_count = static_cast<std::size_t>(2 * angles_ + 1);
+    inside_.clear();
+    border_.clear();
+    inside_begin_.assign(angle_count + 1, 0);
+    border_begin_.assign(angle_count + 1, 0);
+    for (int a = -angles_; a <= angles_; ++a) {
+      const Scalar theta = theta0_ + Scalar(a) * step_;
+      const Scalar c = std::cos(theta), s = std::sin(theta);
+      for (std::size_t k = 0; k < n; ++k) {
+        const point_type& p = points_[k];
+        const Scalar x = c * p.x() - s * p.y() + t0_.x(), y = s * p.x() + c * p.y() + t0_.y();
+        const Scalar fx = std::floor((x - origin_.x()) / r), fy = std::floor((y - origin_.y()) / r);
+        const Scalar w = Scalar(wx_);
+        if (fx + w < Scalar(-pad_) || fy + w < Scalar(-pad_) || fx - w >= Scalar(width_) ||
+            fy - w >= Scalar(height_))
+          continue;  // never on the grid (also keeps the casts below in range)
+        const Cell cell{static_cast<int>(fx), static_cast<int>(fy)};
+        if (cell.x - wx_ >= -pad_ && cell.y - wx_ >= -pad_ && cell.x + wx_ < width_ &&
+            cell.y + wx_ < height_)
+          inside_.push_back(static_cast<std::ptrdiff_t>(index(cell.x, cell.y)));
+        else
+          border_.push_back(cell);
+      }
+      const auto next = static_cast<std::size_t>(a + angles_) + 1;
+      inside_begin_[next] = inside_.size();
+      border_begin_[next] = border_.size();
+    }
+    const int top = params_.levels - 1;
+    roots_.clear();
+    for (int a = -angles_; a <= angles_; ++a)
+      for (int x = -wx_; x <= wx_; x += 1 << top)
+        for (int y = -wx_; y <= wx_; y += 1 << top)
+          roots_.push_back({a + angles_, x, y, score(top, a + angles_, x, y)});
+    std::sort(roots_.begin(), roots_.end(), by_score);
+    return true;
+  }
+
+  // Branch and bound over the prepared roots.
+  std::optional<CorrelativeMatch<Scalar>> run(
+      Scalar min_score, const std::optional<SearchExclusion<Scalar>>& exclusion) const {
+    const Scalar r = params_.resolution;
+    const auto n = static_cast<Scalar>(points_.size());
+    exclusion_ = exclusion;
+    if (exclusion_) {  // in cell offsets from t0
+      exclusion_->center.translation() = (exclusion_->center.translation() - t0_) / r;
+      exclusion_->radius /= r;
+    }
+    Candidate best{0, 0, 0, static_cast<float>(min_score * n)};
+    bool found = false;
+    search(roots_, params_.levels - 1, wx_, best, found);
+    if (!found) return std::nullopt;
+    CorrelativeMatch<Scalar> m;
+    const Scalar theta = theta0_ + Scalar(best.angle - angles_) * step_;
+    m.pose = make_transform2(t0_.x() + Scalar(best.x) * r, t0_.y() + Scalar(best.y) * r, theta);
+    m.score = static_cast<Scalar>(best.score) / n;
+    m.points = points_.size();
+    return m;
+  }
+
   // Eq. (15): the summed precomputed grid of height h at the scan's cells shifted by (x, y).
   [[nodiscard]] float score(int h, int angle, int x, int y) const {
-    const std::size_t n = points_.size();
-    const Cell* c = cells_.data() + static_cast<std::size_t>(angle) * n;
+    const auto a = static_cast<std::size_t>(angle);
+    const float* grid = grids_[static_cast<std::size_t>(h)].data();
+    const std::ptrdiff_t shift = static_cast<std::ptrdiff_t>(y) * stride_ + x;
     float sum = 0;
-    for (std::size_t k = 0; k < n; ++k)
-      sum += value(h, c[k].x + x, c[k].y + y);
+    for (std::size_t k = inside_begin_[a]; k < inside_begin_[a + 1]; ++k)
+      sum += grid[inside_[k] + shift];
+    for (std::size_t k = border_begin_[a]; k < border_begin_[a + 1]; ++k)
+      sum += value(h, border_[k].x + x, border_[k].y + y);
     return sum;
   }
   // Algorithm 3 (depth-first branch and bound, best child first).
-  void search(std::vector<Candidate>& candidates, int h, int w, Candidate& best,
+  void search(const std::vector<Candidate>& candidates, int h, int w, Candidate& best,
               bool& found) const {
     for (const Candidate& c : candidates) {
       if (c.score <= best.score) break;  // sorted: nothing later can beat the best
-      if (excluded(c, h)) continue;
-      if (h == 0) {
-        best = c;
-        found = true;
-        continue;
+      expand(c, h, w, best, found);
+    }
+  }
+  void expand(const Candidate& c, int h, int w, Candidate& best, bool& found) const {
+    if (excluded(c, h)) return;
+    if (h == 0) {
+      best = c;
+      found = true;
+      return;
+    }
+    const int s = 1 << (h - 1);
+    // Children beyond the window stay at -inf and sort last (the loop stops before them).
+    std::array<Candidate, 4> children;
+    children.fill({c.angle, c.x, c.y, -std::numeric_limits<float>::infinity()});
+    for (int dx = 0; dx < 2; ++dx)
+      for (int dy = 0; dy < 2; ++dy) {
+        const int x = c.x + dx * s, y = c.y + dy * s;
+        if (x > w || y > w) continue;
+        children[static_cast<std::size_t>(2 * dx + dy)] = {c.angle, x, y,
+                                                           score(h - 1, c.angle, x, y)};
       }
-      const int s = 1 << (h - 1);
-      std::vector<Candidate> children;
-      children.reserve(4);
-      for (int dx = 0; dx < 2; ++dx)
-        for (int dy = 0; dy < 2; ++dy) {
-          const int x = c.x + dx * s, y = c.y + dy * s;
-          if (x > w || y > w) continue;
-          children.push_back({c.angle, x, y, score(h - 1, c.angle, x, y)});
-        }
-      std::sort(children.begin(), children.end(), by_score);
-      search(children, h - 1, w, best, found);
+    std::sort(children.begin(), children.end(), by_score);
+    for (std::size_t i = 0; i < children.size(); ++i) {
+      if (children[i].score <= best.score) break;
+      expand(children[i], h - 1, w, best, found);
     }
   }
   // Whether every translation of node c (height h) lies in the exclusion: the farthest corner
@@ -333,8 +395,15 @@ class CorrelativeScanMatcher {
   std::vector<std::vector<float>> grids_;  ///< level h: Eq. (14), cells [-pad, size)
   mutable std::vector<Keyed> keyed_;
   mutable std::vector<point_type> points_;
-  mutable std::vector<Cell> cells_;
   mutable std::vector<Scalar> ranges_;
+  // The prepared search (prepare()): rotated scans split per angle, sorted roots, the step.
+  mutable std::vector<std::ptrdiff_t> inside_;
+  mutable std::vector<Cell> border_;
+  mutable std::vector<std::size_t> inside_begin_, border_begin_;
+  mutable std::vector<Candidate> roots_;
+  mutable Scalar step_ = 0, theta0_ = 0;
+  mutable point_type t0_ = point_type::Zero();
+  mutable int angles_ = 0, wx_ = 0;
   mutable std::optional<SearchExclusion<Scalar>> exclusion_;  ///< in cell offsets
 };
 
