@@ -107,7 +107,7 @@ std::string real_data(const std::filesystem::path& dir) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::printf("{%s}\n",
-              real_data(argc > 1 ? argv[1] : RANGENAV_EXAMPLE_DATA_DIR).substr(2).c_str());
+  const std::string json = real_data(argc > 1 ? argv[1] : RANGENAV_EXAMPLE_DATA_DIR);
+  std::printf("{%s}\n", json.empty() ? "" : json.c_str() + 2);  // members start with ", "
   return 0;
 }
