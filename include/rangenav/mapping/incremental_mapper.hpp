@@ -436,7 +436,7 @@ template <std::floating_point Scalar = double>
 using LaserIcp = BasicIcp<2, Scalar, PointToLineSolver<Scalar>, DecayingDistanceRejector<Scalar>>;
 
 /// The documented configuration for 2D laser SLAM (the best found on the MIT CSAIL benchmark
-/// log, 0.062 m mean relation error without loop closure; the sweep is in benchmarks/README.md):
+/// log, 0.062 m mean relation error without loop closure; figures in docs/benchmarks.md):
 /// scan-to-scan pre-alignment with the constant-velocity hypothesis, point-to-line map
 /// registration with a 0.5 -> 0.2 m threshold, key frames every 0.25 m / 10°, eps_D = 0.15 m,
 /// and map corrections of the scan-to-scan result above 0.5 m / 3° rejected (the scan-to-scan
