@@ -167,6 +167,7 @@ struct PoseGraphResult {
   int iterations{0};       ///< steps tried (each one a factorisation and a solve)
   int accepted_steps{0};   ///< steps that lowered the cost
   bool cholmod{false};     ///< true when CHOLMOD factored the normal equations (see backend)
+  /// Why the optimiser stopped (see PoseGraphTermination).
   PoseGraphTermination termination{PoseGraphTermination::nothing_to_optimize};
 
   /// True when the optimiser stopped at a minimum (cost or step tolerance reached, or nothing to
@@ -199,7 +200,9 @@ class PoseGraph {
   using EdgeId = std::size_t;
   /// An edge's loss.
   using Loss = PoseGraphLoss<Scalar>;
+  /// The optimiser's settings (see PoseGraphOptions for their defaults).
   using Options = PoseGraphOptions<Scalar>;
+  /// What optimize() returns.
   using Result = PoseGraphResult<Scalar>;
 
   /// A relative-pose measurement: the pose of node `to` in the frame of node `from`.
