@@ -88,6 +88,8 @@ TEST_CASE("CorrelativeScanMatcher finds the true pose, as the exhaustive search 
   CHECK(error.translation().norm() < 0.1);  // one cell
   CHECK(std::abs(rangenav::rotation_angle(error)) < 0.01);
   CHECK(match->score > 0.6);
+  // The search's score (cells split into always-on-grid and border cells) is Eq. (9) at its pose.
+  CHECK(match->score == Approx(matcher.score(data, match->pose)).margin(0.01));
 
   // One level is Eq. (10), the exhaustive search: branch and bound must find its maximum.
   rangenav::CorrelativeScanMatcherParams<double> flat;
