@@ -162,7 +162,7 @@ template <int D, class Scalar>
     out.chi2 = std::numeric_limits<Scalar>::infinity();
     return out;
   }
-  out.pose = a * lie::se_exp<D, Scalar>(delta);
+  out.pose = a * lie::se_exp<D>(delta);
   return out;
 }
 
@@ -202,7 +202,7 @@ template <int D, class Scalar>
     if (lambda < 1) kept(i) = z(i);
   }
   const lie::PoseTangent<D, Scalar> delta = l_inv.transpose() * (eig.eigenvectors() * kept);
-  if (delta.allFinite()) out.pose = a * lie::se_exp<D, Scalar>(delta);
+  if (delta.allFinite()) out.pose = a * lie::se_exp<D>(delta);
   return out;
 }
 
