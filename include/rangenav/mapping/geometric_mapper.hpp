@@ -171,7 +171,7 @@ class GeometricMapper {
   using Rejector = FrustumRejector<3, double>;
   /// Point-to-plane ICP against the point map's normals (see the file comment).
   using IcpType =
-      BasicIcp<3, double, PointToPlaneSolver<double>, DecayingDistanceRejector<double>, Rejector>;
+      BasicIcp<3, double, PointToPlaneSolver<3, double>, DecayingDistanceRejector<double>, Rejector>;
 
   explicit GeometricMapper(const GeometricMapperParams& params = {})
       : params_(validated(params)),
