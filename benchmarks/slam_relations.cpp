@@ -1,22 +1,25 @@
-// The Freiburg SLAM benchmark's metric (Kümmerle et al. 2009) for rangenav's incremental mapper
-// on the MIT CSAIL log, and its speed.
+// The Freiburg SLAM benchmark's metric (Kümmerle et al. 2009) for rangenav's 2D SLAM on the MIT
+// CSAIL log, and its speed.
 //
 //   bench_slam_relations TRAJECTORY RELATIONS   evaluates a trajectory file (`t x y theta`, e.g.
 //                                               03_slam_carmen's trajectory.txt) and exits;
 //   bench_slam_relations [benchmark flags]      maps ../shared/data/carmen/mit-csail.clf.gz with
-//                                               IncrementalMapper<2> in the papers' setup and
-//                                               LaserSlamMapper with laser_slam_params() (one
-//                                               thread, no loop closure), prints the errors
-//                                               against slam-benchmark/mit-csail.relations (all,
-//                                               short < 2 s, long), the sparse-map sizes, then
-//                                               times the whole log per iteration (scans per
-//                                               second) for both, and for the papers' setup
-//                                               with a GrowingKdTree map index.
+//                                               LaserSlam in its default configuration (loop
+//                                               closure), with its front end alone, with
+//                                               IncrementalMapper<2> in the papers' setup, prints
+//                                               the errors against slam-benchmark/
+//                                               mit-csail.relations (all, short < 2 s, long) and
+//                                               the CPU speed of LaserSlam beside Open3D's
+//                                               scan-to-scan ICP on the same scans (the
+//                                               yardstick, when Open3D is installed; run with
+//                                               OMP_NUM_THREADS=1), then times the whole log per
+//                                               iteration (scans per second) for each.
 
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <numbers>
 #include <optional>
@@ -26,6 +29,13 @@
 #include "rangenav/io/slam_relations.hpp"
 #include "rangenav/io/trajectory.hpp"
 #include "rangenav/mapping/incremental_mapper.hpp"
+#include "rangenav/mapping/loop_closing_mapper.hpp"
+
+#ifdef RANGENAV_HAVE_OPEN3D
+#include <open3d/geometry/PointCloud.h>
+#include <open3d/pipelines/registration/Registration.h>
+#include <open3d/pipelines/registration/TransformationEstimation.h>
+#endif
 
 namespace {
 
@@ -63,6 +73,65 @@ Run map_log(const std::vector<rangenav::io::CarmenLaser>& lasers, Mapper mapper)
   run.offered = mapper.map().points_offered();
   run.memory = mapper.map().memory_bytes();
   return run;
+}
+
+struct SlamRun {
+  std::vector<double> stamps;
+  std::vector<rangenav::Pose2d> poses;
+  std::size_t key_frames = 0, loops = 0, candidates = 0;
+};
+
+// LaserSlam over the log; the trajectory re-anchored to the optimised key frames.
+SlamRun map_log_slam(const std::vector<rangenav::io::CarmenLaser>& lasers, bool loop_closure) {
+  rangenav::LoopClosureParams<double> loops;
+  loops.enabled = loop_closure;
+  rangenav::LaserSlam<double> slam(rangenav::laser_slam_params<double>(), loops);
+  SlamRun run;
+  for (const auto& laser : lasers) {
+    std::optional<rangenav::Transform2d> odom;
+    if (laser.odom_pose) odom = laser.odom_pose->to_isometry();
+    slam.process(laser.scan, odom);
+    run.stamps.push_back(laser.timestamp);
+  }
+  slam.finish();
+  for (const auto& t : slam.trajectory())
+    run.poses.push_back(rangenav::Pose2d::from_isometry(t));
+  run.key_frames = slam.key_frames();
+  run.loops = slam.loop_closures().size();
+  run.candidates = slam.loop_attempts();
+  return run;
+}
+
+#ifdef RANGENAV_HAVE_OPEN3D
+// Open3D's point-to-point ICP of every scan against the previous one from the odometry guess
+// (max correspondence distance 0.5 m, 30 iterations): the speed yardstick of issue 19.
+void open3d_scan_to_scan(const std::vector<rangenav::io::CarmenLaser>& lasers) {
+  namespace reg = open3d::pipelines::registration;
+  std::vector<open3d::geometry::PointCloud> clouds(lasers.size());
+  for (std::size_t i = 0; i < lasers.size(); ++i)
+    for (const auto& p : lasers[i].scan.valid_points())
+      clouds[i].points_.emplace_back(p.x(), p.y(), 0.0);
+  for (std::size_t i = 1; i < lasers.size(); ++i) {
+    Eigen::Matrix4d guess = Eigen::Matrix4d::Identity();
+    if (lasers[i].odom_pose && lasers[i - 1].odom_pose) {
+      const auto d = rangenav::relative(*lasers[i - 1].odom_pose, *lasers[i].odom_pose);
+      guess.block<2, 2>(0, 0) = d.to_isometry().linear();
+      guess.block<2, 1>(0, 3) = d.position();
+    }
+    if (clouds[i].points_.empty() || clouds[i - 1].points_.empty()) continue;
+    benchmark::DoNotOptimize(reg::RegistrationICP(clouds[i], clouds[i - 1], 0.5, guess,
+                                                  reg::TransformationEstimationPointToPoint(),
+                                                  reg::ICPConvergenceCriteria(1e-6, 1e-6, 30)));
+  }
+}
+#endif
+
+// CPU seconds of f() (process time: the figure the speed goal is stated in).
+template <class F>
+double cpu_seconds(F&& f) {
+  const std::clock_t start = std::clock();
+  f();
+  return static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC;
 }
 
 const std::vector<rangenav::io::CarmenLaser>& csail() {
@@ -105,6 +174,19 @@ void BM_rangenav_mapper_kd_tree_csail(benchmark::State& state) {
 void BM_rangenav_laser_mapper_csail(benchmark::State& state) {
   time_mapper(state, laser_mapper);
 }
+void BM_rangenav_laser_slam_csail(benchmark::State& state) {
+  if (!std::filesystem::exists(data_dir / "carmen/mit-csail.clf.gz")) {
+    state.SkipWithError("carmen/mit-csail.clf.gz not found");
+    return;
+  }
+  const auto& lasers = csail();
+  for (auto _ : state)
+    benchmark::DoNotOptimize(map_log_slam(lasers, true));
+  state.counters["scans_per_second"] = benchmark::Counter(
+      static_cast<double>(lasers.size()) * static_cast<double>(state.iterations()),
+      benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_rangenav_laser_slam_csail)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_rangenav_mapper_csail)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_rangenav_mapper_kd_tree_csail)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_rangenav_laser_mapper_csail)->Unit(benchmark::kMillisecond)->Iterations(3);
@@ -139,6 +221,26 @@ int main(int argc, char** argv) {
               static_cast<double>(std::max<std::size_t>(run.map_points, 1)),
           run.rejected);
     };
+    const auto report_slam = [&](const char* name, const SlamRun& run) {
+      std::printf("%s on MIT CSAIL (%zu scans):\n", name, run.stamps.size());
+      print_errors(rangenav::io::evaluate_slam_relations(rel, run.stamps, run.poses));
+      std::printf("  %zu key frames, %zu loop closures of %zu candidates\n", run.key_frames,
+                  run.loops, run.candidates);
+    };
+    SlamRun slam;
+    const double slam_cpu = cpu_seconds([&] { slam = map_log_slam(csail(), true); });
+    report_slam("LaserSlam (default configuration, loop closure)", slam);
+    report_slam("LaserSlam front end alone (--no-loop-closure)", map_log_slam(csail(), false));
+    const double scans = static_cast<double>(csail().size());
+    std::printf("LaserSlam: %.0f scans/s CPU (whole pipeline incl. loop closure, 1 thread)\n",
+                scans / slam_cpu);
+#ifdef RANGENAV_HAVE_OPEN3D
+    const double open3d_cpu = cpu_seconds([&] { open3d_scan_to_scan(csail()); });
+    std::printf(
+        "Open3D scan-to-scan ICP: %.0f scans/s CPU (same run; OMP_NUM_THREADS=1 for 1 thread); "
+        "LaserSlam / Open3D = %.2f\n",
+        scans / open3d_cpu, open3d_cpu / slam_cpu);
+#endif
     report("IncrementalMapper<2> (papers' setup)", map_log(csail(), paper_mapper()));
     report("LaserSlamMapper (laser_slam_params)", map_log(csail(), laser_mapper()));
   }

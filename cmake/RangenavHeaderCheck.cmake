@@ -20,4 +20,10 @@ function(rangenav_add_header_check)
     target_link_libraries(rangenav_header_check PRIVATE rangenav::clipper)
   endif()
   rangenav_set_warnings(rangenav_header_check)
+  # Nothing here runs: compile without optimisation, debug information or sanitizers (a build's
+  # CMAKE_CXX_FLAGS may ask for them), which only cost time.
+  target_compile_options(rangenav_header_check PRIVATE -O0 -g0)
+  if(CMAKE_CXX_COMPILER_ID MATCHES "Clang|GNU")
+    target_compile_options(rangenav_header_check PRIVATE -fno-sanitize=all)
+  endif()
 endfunction()

@@ -226,6 +226,164 @@ struct MapLocalizer {
   }
 };
 
+// ---- the mapping tour (paper 002 Fig. 2, paper 000 §3) -----------------------------------------
+
+/// The robot's three range sensors with the defaults of the papers' hardware. Each draws from
+/// its own engine, so changing one sensor's rate does not change another's noise.
+struct Sensors {
+  LaserScanner2D laser;      ///< S300: 270 deg at 0.5 deg, level at 0.30 m; read at 10 Hz
+  PitchingScanner pitching;  ///< a 2D scan every 13.32 ms, nodding -10..40 deg
+  TofCamera tof;             ///< SR4000 tilted 25 deg down at the floor ahead; read at 0.5 Hz
+  std::mt19937 laser_rng, pitching_rng, tof_rng;
+  std::size_t next_pitched = 0;  ///< the pitching scanner's next scan
+};
+
+Sensors make_sensors(unsigned seed) {
+  TofCameraParams tof_params;
+  tof_params.tilt = deg_to_rad(25.0);
+  return {LaserScanner2D(),       PitchingScanner(),      TofCamera(tof_params),
+          std::mt19937(seed + 1), std::mt19937(seed + 2), std::mt19937(seed + 3)};
+}
+
+/// What each sensor perceived of the obstacles a 2D laser cannot see, counted with the truth.
+struct Perception {
+  std::size_t laser_scans = 0, laser_on_table_legs = 0, laser_on_table_top = 0;
+  std::size_t pitched_scans = 0, pitching_on_table_top = 0, pitching_on_drawer = 0;
+  std::size_t below_floor = 0, tof_frames = 0, tof_mixed_pixels = 0;
+  std::vector<Point2d> laser_points;          ///< every 4th scan's end points (world frame)
+  std::vector<Point3d> pitched_world_points;  ///< every 3rd pitched scan's points off the floor
+};
+
+/// The 2D laser: its scan goes to the SLAM; the truth tells which beams hit the couch table (the
+/// table's top lies above the scan plane, so only its legs can be hit).
+LaserScan<double> sense_laser(const Scene& scene, const DifferentialDriveRobot& robot, Sensors& s,
+                              Perception& seen) {
+  const LaserScan<double> scan = s.laser.scan(scene.world, robot.pose(), s.laser_rng, robot.time());
+  ++seen.laser_scans;
+  if (seen.laser_scans % 4 == 0)
+    for (const Point2d& p : scan.valid_points())
+      seen.laser_points.push_back(robot.pose().transform_point(p));
+  const SceneObject& couch_table = scene.object("couch_table");
+  for (const RayHit& h : s.laser.cast(scene.world, robot.pose())) {
+    if (!h.hit() || !couch_table.contains({h.kind, h.index})) continue;
+    (h.kind == SurfaceKind::box ? seen.laser_on_table_top : seen.laser_on_table_legs) += 1;
+  }
+  return scan;
+}
+
+/// The pitching scanner: every 2D scan whose time fell into this control step, turned into 3D
+/// with Eq. (3) of paper 002 and into the world frame with the true pose.
+void sense_pitching(const Scene& scene, const DifferentialDriveRobot& robot, Sensors& s,
+                    Perception& seen) {
+  const SceneObject& couch_table = scene.object("couch_table");
+  const SceneObject& drawer = scene.object("drawer");
+  const auto over = [](const SceneObject& o, const Point3d& g) {
+    return g.x() > o.min.x() && g.x() < o.max.x() && g.y() > o.min.y() && g.y() < o.max.y() &&
+           g.z() > o.min.z() + 0.2 * (o.max.z() - o.min.z());
+  };
+  const Transform3d to_world = robot_transform(robot.pose());
+  while (s.pitching.scan_time(s.next_pitched) <= robot.time()) {
+    const PitchedScan<double> ps = s.pitching.scan(
+        scene.world, robot.pose(), s.pitching.scan_time(s.next_pitched), s.pitching_rng);
+    ++s.next_pitched;
+    ++seen.pitched_scans;
+    for (const Point3d& p : pitched_points(ps.scan, ps.pitch, s.pitching.params().sensor_offset)) {
+      const Point3d g = to_world * p;
+      seen.pitching_on_table_top += over(couch_table, g) && g.z() > couch_table.max.z() - 0.06;
+      seen.pitching_on_drawer += over(drawer, g);
+      if (g.z() < -0.05) ++seen.below_floor;  // the descending stair (paper 002 §4.2)
+      if (seen.pitched_scans % 3 == 0 && (g.z() > 0.03 || g.z() < -0.03))
+        seen.pitched_world_points.push_back(g);
+    }
+  }
+}
+
+/// The ToF camera: counts mixed pixels (depth strictly between neighbours that jump).
+void sense_tof(const Scene& scene, const DifferentialDriveRobot& robot, Sensors& s,
+               Perception& seen) {
+  const DepthImage<double> img = s.tof.capture(scene.world, robot.pose(), s.tof_rng, robot.time());
+  ++seen.tof_frames;
+  for (std::size_t row = 0; row < img.height(); ++row)
+    for (std::size_t c = 1; c + 1 < img.width(); ++c) {
+      const double a = img.at(row, c - 1), b = img.at(row, c), d = img.at(row, c + 1);
+      if (std::isfinite(a) && std::isfinite(b) && std::isfinite(d) && std::abs(a - d) > 0.3 &&
+          std::min(a, d) + 0.1 < b && b < std::max(a, d) - 0.1)
+        ++seen.tof_mixed_pixels;
+    }
+}
+
+/// How the tour went.
+struct Tour {
+  std::size_t waypoints_reached = 0, contacts = 0;
+  double time = 0, distance = 0, odometry_error = 0;
+  std::vector<Pose2d> true_path, odometry_path;
+  Pose2d final_pose;
+};
+
+/// Drives the scene's tour at 50 Hz, mapping online with the 2D laser (OnlineSlam) and steering
+/// by that estimate: odometry alone drifts too much to pass 0.9 m doors on a 60 s tour, so the
+/// robot steers by the SLAM pose of the last scan moved on by the odometry since.
+Tour drive_tour(const Scene& scene, const DifferentialDriveParams& robot_params, unsigned seed,
+                OnlineSlam& slam, Perception& seen) {
+  DifferentialDriveRobot robot(robot_params, scene.start);
+  Sensors sensors = make_sensors(seed);
+  std::mt19937 robot_rng(seed);
+  WaypointFollower follower{scene.tour};
+  Tour tour;
+  tour.true_path = {robot.pose()};
+  tour.odometry_path = {robot.odometry()};
+  Pose2d slam_fix = robot.odometry(), odometry_at_fix = robot.odometry();  // the start, at first
+  for (std::size_t step = 1; !follower.done() && robot.time() < 180.0; ++step) {
+    const Pose2d believed = compose(slam_fix, relative(odometry_at_fix, robot.odometry()));
+    const auto [v, omega] = follower.command(believed);
+    const Pose2d before = robot.pose();
+    if (!robot.step(scene.world, v, omega, robot_rng).moved) ++tour.contacts;
+    tour.distance += (robot.pose().position() - before.position()).norm();
+    if (step % 10 == 0) {
+      tour.true_path.push_back(robot.pose());
+      tour.odometry_path.push_back(robot.odometry());
+    }
+    if (step % 5 == 0) {  // 10 Hz
+      slam.add(sense_laser(scene, robot, sensors, seen), robot.odometry(), robot.pose());
+      slam_fix = slam.estimate.back();
+      odometry_at_fix = robot.odometry();
+    }
+    sense_pitching(scene, robot, sensors, seen);
+    if (step % 100 == 0) sense_tof(scene, robot, sensors, seen);  // 0.5 Hz
+  }
+  tour.true_path.push_back(robot.pose());
+  tour.odometry_path.push_back(robot.odometry());
+  tour.waypoints_reached = follower.next;
+  tour.time = robot.time();
+  tour.final_pose = robot.pose();
+  tour.odometry_error = (robot.odometry().position() - robot.pose().position()).norm();
+  return tour;
+}
+
+/// demo_out/world.svg: world, true path, odometry path, laser end points, 3D points off the floor,
+/// the SLAM map and path.
+void draw_tour(const Scene& scene, const Tour& tour, const Perception& seen,
+               const OnlineSlam& slam) {
+  std::filesystem::create_directories("demo_out");
+  io::SvgDrawing svg({.size_px = 900});
+  draw_world(svg, scene.world, LaserScannerParams{}.mount.translation().z());
+  std::vector<Point3d> above, below;
+  for (const Point3d& p : seen.pitched_world_points)
+    (p.z() > 0 ? above : below).push_back(p);
+  svg.layer("pitching scanner points off the floor")
+      .points(above, {.stroke = "#8e44ad", .opacity = 0.35, .point_radius_px = 0.8});
+  svg.layer("pitching scanner points below the floor")
+      .points(below, {.stroke = "#1f618d", .point_radius_px = 1.2});
+  svg.layer("2D laser end points")
+      .points(seen.laser_points, {.stroke = "#e74c3c", .opacity = 0.5, .point_radius_px = 0.8});
+  svg.layer("true path").path(tour.true_path, {.stroke = "#27ae60", .stroke_width_px = 2.5});
+  svg.layer("odometry").path(tour.odometry_path, {.stroke = "#2c3e50", .stroke_width_px = 1.5});
+  slam.draw(svg);
+  svg.layer("robot").circle(tour.final_pose.position(), 0.3, {.stroke = "#27ae60"});
+  svg.pose(tour.final_pose, 0.4, {.stroke = "#27ae60", .fill = "#27ae60"});
+  svg.save("demo_out/world.svg");
+}
+
 // ---- closed-loop navigation (papers 000 §4-5, 002 §5, 003 §2.2) --------------------------------
 
 struct NavigationResult {
@@ -243,18 +401,9 @@ struct NavigationResult {
   std::string goal_name;
 };
 
-/// Plans from the hallway to the dresser in the kitchen on the pruned Voronoi graph of the SLAM
-/// sparse point map the mapping tour built, follows the path with Indiveri's tracker and
-/// finishes with the pose controller, both steering by the pose estimated on that map (odometry
-/// prediction + scan registration, MapLocalizer). The reactive behaviours keep the roadway clear on
-/// the pitching scanner's obstacle map, and the path is re-planned when the latest 2D scan or the
-/// obstacle map shows an obstacle on it: a box blocks the corridor and a can stands in the kitchen.
-/// The simulator's truth is used only to score the run. Draws demo_out/navigation.svg (paper 000
-/// Fig. 6a).
-NavigationResult run_navigation(const Scene& scene, const OnlineSlam& slam,
-                                const DifferentialDriveParams& robot_params, unsigned seed) {
-  NavigationResult out;
-  // The named goal (paper 000 §1: "go to the refrigerator"): the dresser, its front facing west.
+/// The named places of the topological map (paper 000 §1: "go to the refrigerator"): the
+/// dresser (its front facing west), the counter and the couch table, with their outlines.
+TopologicalMap named_places(const Scene& scene) {
   TopologicalMap places;
   for (const char* name : {"dresser", "counter", "couch_table"}) {
     const SceneObject& o = scene.object(name);
@@ -266,36 +415,97 @@ NavigationResult run_navigation(const Scene& scene, const OnlineSlam& slam,
                 {c.x(), c.y(), facing},
                 {{-h.x(), -h.y()}, {h.x(), -h.y()}, {h.x(), h.y()}, {-h.x(), h.y()}}});
   }
+  return places;
+}
+
+/// The world after planning: a stack of boxes blocks the corridor between the living room's door
+/// and the kitchen's, and a can (10 cm, below the 2D laser's plane: only the pitching scanner's
+/// obstacle map shows it) stands on the kitchen floor west of the dining table. The map knows
+/// neither.
+World world_after_planning(const Scene& scene) {
+  World world = scene.world;
+  world.add_box({{4.4, 5.6}, {0.4, 1.2}, 0.0, 0.0, 0.9});
+  world.add_cylinder({{6.59, 3.15}, 0.05, 0.0, 0.10});
+  world.build_index();
+  return world;
+}
+
+/// The reactive behaviours (paper 002 §5) for a robot of `radius`: the roadway slightly wider
+/// than the robot, a stop 10 cm before an obstacle, and a gentle pull towards free space. The
+/// tracker and the pose controller know which way they want to turn (StopTurn::commanded).
+ReactiveBehaviours demo_reactive(double radius) {
+  ReactiveParams p;
+  p.roadway = {.half_width = radius + 0.03,
+               .front_offset = radius,
+               .dto_min = 0.1,
+               .dto_max = 1.0,
+               .v_max = 0.3,
+               .turn_rate = 0.6};
+  p.free_space = {.dto_min = 0.3, .dto_max = 1.5, .influence = 0.05};
+  p.stop_turn = StopTurn::commanded;
+  return ReactiveBehaviours(p);
+}
+
+/// demo_out/navigation.svg (paper 000 Fig. 6a): the SLAM map, the pruned graph, the blocked
+/// edges, the first and last plans and the driven trajectory over the true world (pale).
+void draw_navigation(const World& world, const std::vector<Point2d>& map,
+                     const VoronoiPathGraph& graph, const std::vector<std::uint32_t>& blocked,
+                     const PlannedPath& first_plan, const PlannedPath& last_plan,
+                     const std::vector<Pose2d>& driven, const std::vector<Pose2d>& believed,
+                     const Pose2d& goal) {
+  io::SvgDrawing svg({.size_px = 900});
+  draw_world(svg, world, apartment_scan_height, 0.35);
+  svg.layer("SLAM sparse map").points(map, {.stroke = "#d35400", .point_radius_px = 1.6});
+  const auto edge = [&](std::uint32_t e, const io::Style& style) {
+    svg.segment(graph.nodes()[graph.edges()[e].from].position,
+                graph.nodes()[graph.edges()[e].to].position, style);
+  };
+  svg.layer("pruned Voronoi graph");
+  for (std::uint32_t e = 0; e < graph.edge_count(); ++e)
+    edge(e, {.stroke = "#85c1e9", .stroke_width_px = 0.8});
+  svg.layer("blocked edges");
+  for (std::uint32_t e : blocked)
+    edge(e, {.stroke = "red", .stroke_width_px = 4});
+  svg.layer("first plan")
+      .polyline(first_plan.waypoints, {.stroke = "#2874a6", .stroke_width_px = 2});
+  svg.layer("last plan").polyline(last_plan.waypoints, {.stroke = "#e67e22", .stroke_width_px = 2});
+  svg.layer("driven (true)").path(driven, {.stroke = "#27ae60", .stroke_width_px = 2.5});
+  svg.layer("driven (estimated)").path(believed, {.stroke = "#1e8449", .stroke_width_px = 1});
+  svg.layer("goal").pose(goal, 0.4, {.stroke = "#c0392b", .fill = "#c0392b"});
+  svg.save("demo_out/navigation.svg");
+}
+
+/// Plans from the hallway to the dresser on the pruned Voronoi graph of the SLAM map, follows
+/// the path with Indiveri's tracker and finishes with the pose controller, both steering by the
+/// pose estimated on that map (MapLocalizer). The reactive behaviours keep the roadway clear on
+/// the pitching scanner's obstacle map, and the path is re-planned when the latest 2D scan or the
+/// obstacle map shows an obstacle on it. The simulator's truth only scores the run.
+NavigationResult run_navigation(const Scene& scene, const OnlineSlam& slam,
+                                const DifferentialDriveParams& robot_params, unsigned seed) {
+  NavigationResult out;
   out.goal_name = "dresser";
-  const Pose2d goal = places.at(out.goal_name).approach_pose(1.1);
+  const Pose2d goal = named_places(scene).at(out.goal_name).approach_pose(1.1);
 
   // The robot is back on its start pose in the hallway, where the mapping tour began: it knows
   // that pose (the start of its odometry frame), and the first scan registration refines it.
   DifferentialDriveRobot robot(robot_params, scene.start);
   MapLocalizer localizer(slam, scene.start, robot.odometry());
 
-  // Plan on the SLAM map, with the robot's width and the paper's 5 cm margin.
+  // Plan on the SLAM map, with the robot's width and the paper's 5 cm margin. The straight
+  // connections of start and goal to the graph are checked against the map's points only, and a
+  // wall ends up to eps_D beyond its last point: they keep that much more clearance.
   const double radius = robot_params.footprint.radius;
   const std::vector<Point2d> map = slam.world_map();
   VoronoiPathGraph graph(map, {.robot_width = 2 * radius, .safety_margin = 0.05});
   out.graph_nodes = graph.node_count();
   out.graph_edges = graph.edge_count();
-  // The straight connections of start and goal to the graph are checked against the map's
-  // points only, and a wall's end lies up to eps_D beyond its last point: they keep that much more.
   const double eps_d = slam.mapper.map().params().epsilon_d;
   AStar planner(graph, {.connection_clearance = graph.params().required_clearance() + eps_d});
   PlanResult plan = planner.plan(localizer.estimate.position(), goal.position());
   if (!plan.found()) return out;
   const PlannedPath first_plan = plan.path;
 
-  // After planning, a stack of boxes blocks the corridor between the living room's door and the
-  // kitchen's, and a can (10 cm, below the 2D laser's plane: only the pitching scanner's obstacle
-  // map shows it) stands on the kitchen floor west of the dining table. The map knows neither.
-  World world = scene.world;
-  world.add_box({{4.4, 5.6}, {0.4, 1.2}, 0.0, 0.0, 0.9});
-  world.add_cylinder({{6.59, 3.15}, 0.05, 0.0, 0.10});
-  world.build_index();
-
+  const World world = world_after_planning(scene);
   std::mt19937 rng(seed), laser_rng(seed + 1);
   const LaserScanner2D laser;
   PitchingScannerParams pitching_params;
@@ -312,27 +522,16 @@ NavigationResult run_navigation(const Scene& scene, const OnlineSlam& slam,
       {.speed = 0.3, .corridor_half_width = radius + 0.02, .min_blocking_points = 4});
   tracker.set_path(LocalFramePath(plan.path));
   IndiveriPoseController approach({.max_speed = 0.3});
-  ReactiveParams rp_behaviour;
-  rp_behaviour.roadway = {.half_width = radius + 0.03,
-                          .front_offset = radius,
-                          .dto_min = 0.1,
-                          .dto_max = 1.0,
-                          .v_max = 0.3,
-                          .turn_rate = 0.6};
-  rp_behaviour.free_space = {.dto_min = 0.3, .dto_max = 1.5, .influence = 0.05};
-  // The tracker and the pose controller know which way they want to turn.
-  rp_behaviour.stop_turn = StopTurn::commanded;
-  ReactiveBehaviours reactive(rp_behaviour);
+  ReactiveBehaviours reactive = demo_reactive(radius);
 
   const Transform3d mount = laser.params().mount;
   std::vector<Point2d> scan_points;  // the latest 2D scan in the robot frame
   std::vector<Pose2d> driven{robot.pose()}, believed{localizer.estimate};
   std::vector<std::uint32_t> blocked;
   Pose2d previous = localizer.estimate;
-  std::size_t next_pitched = 0, step = 0;
+  std::size_t next_pitched = 0, step = 0, scored = 0;
   bool approaching = false, in_contact = false;
   double error_sq = 0, heading_sq = 0;
-  std::size_t scored = 0;
   while (robot.time() < 150.0) {
     localizer.predict(robot.odometry());
     // Perception: the 2D laser at 10 Hz (registered on the map, then checked against the path),
@@ -408,194 +607,32 @@ NavigationResult run_navigation(const Scene& scene, const OnlineSlam& slam,
       scored == 0 ? 0.0 : rad_to_deg(std::sqrt(heading_sq / static_cast<double>(scored)));
   out.registrations = localizer.accepted + localizer.rejected;
   out.registrations_rejected = localizer.rejected;
-
-  // Paper 000 Fig. 6a: the SLAM map, the pruned graph, the planned paths and the driven
-  // trajectory, over the true world (grey, for reference).
-  io::SvgDrawing svg({.size_px = 900});
-  draw_world(svg, world, apartment_scan_height, 0.35);
-  svg.layer("SLAM sparse map").points(map, {.stroke = "#d35400", .point_radius_px = 1.6});
-  svg.layer("pruned Voronoi graph");
-  for (const auto& e : graph.edges())
-    svg.segment(graph.nodes()[e.from].position, graph.nodes()[e.to].position,
-                {.stroke = "#85c1e9", .stroke_width_px = 0.8});
-  svg.layer("blocked edges");
-  for (std::uint32_t e : blocked)
-    svg.segment(graph.nodes()[graph.edges()[e].from].position,
-                graph.nodes()[graph.edges()[e].to].position,
-                {.stroke = "red", .stroke_width_px = 4});
-  svg.layer("first plan")
-      .polyline(first_plan.waypoints, {.stroke = "#2874a6", .stroke_width_px = 2});
-  svg.layer("last plan").polyline(plan.path.waypoints, {.stroke = "#e67e22", .stroke_width_px = 2});
-  svg.layer("driven (true)").path(driven, {.stroke = "#27ae60", .stroke_width_px = 2.5});
-  svg.layer("driven (estimated)").path(believed, {.stroke = "#1e8449", .stroke_width_px = 1});
-  svg.layer("goal").pose(goal, 0.4, {.stroke = "#c0392b", .fill = "#c0392b"});
-  svg.save("demo_out/navigation.svg");
+  draw_navigation(world, map, graph, blocked, first_plan, plan.path, driven, believed, goal);
   return out;
 }
 
-}  // namespace
+// ---- the report --------------------------------------------------------------------------------
 
-int main(int argc, char** argv) {
-  const auto wall_start = std::chrono::steady_clock::now();
-  if (argc == 3 && std::string_view(argv[1]) == "--docs") write_docs(argv[2]);
-
-  // The world and its ground truth.
-  const Scene scene = apartment();
-  const World& world = scene.world;
-  const SceneObject& couch_table = scene.object("couch_table");
-  const SceneObject& drawer = scene.object("drawer");
-
-  // The robot: a 0.3 m disc up to 1.2 m high, with odometry that overestimates distances by 2 %,
-  // drifts by 0.005 rad/s and is noisy.
-  DifferentialDriveParams robot_params;
-  robot_params.footprint = Footprint::circle(0.3, 0.02, 1.2);
-  robot_params.odometry = {.v_scale = 0.02,
-                           .omega_scale = 0.0,
-                           .omega_bias = 0.005,
-                           .v_sigma = 0.02,
-                           .omega_sigma = 0.05};
-  DifferentialDriveRobot robot(robot_params, scene.start);
-
-  // The sensors, with their default parameters from the papers' hardware.
-  const LaserScanner2D laser;  // S300: 270 deg at 0.5 deg, level at 0.30 m
-  const PitchingScanner pitching;
-  TofCameraParams tof_params;
-  tof_params.tilt = deg_to_rad(25.0);  // look down at the floor ahead
-  const TofCamera tof(tof_params);
-  // Everything below is deterministic for this seed; each component draws from its own engine,
-  // so changing one sensor's rate does not change another's noise.
-  const unsigned seed = 20240101;
-  std::mt19937 robot_rng(seed), laser_rng(seed + 1), pitching_rng(seed + 2), tof_rng(seed + 3);
-
-  WaypointFollower follower{scene.tour};
-  std::vector<Pose2d> true_path{robot.pose()}, odometry_path{robot.odometry()};
-  std::vector<Point2d> laser_points;
-  std::vector<Point3d> pitched_world_points;
-  std::size_t laser_scans = 0, pitched_scans = 0, tof_frames = 0, contacts = 0;
-  std::size_t laser_on_table_top = 0, laser_on_table_legs = 0, pitching_on_table_top = 0,
-              pitching_on_drawer = 0;
-  std::size_t below_floor = 0, tof_mixed_pixels = 0;
-  double distance = 0;
-  OnlineSlam slam;
-  // The pose the robot steers by: the start (its odometry's origin) until the first scan.
-  Pose2d slam_fix = robot.odometry(), odometry_at_fix = robot.odometry();
-  const double max_time = 180.0;
-  std::size_t next_pitched = 0, step = 0;
-
-  while (!follower.done() && robot.time() < max_time) {
-    // Control at 50 Hz. Odometry alone drifts too much to pass 0.9 m doors on a 60 s tour: the
-    // tour steers by the SLAM estimate of the last scan, moved on by the odometry since.
-    const Pose2d believed = compose(slam_fix, relative(odometry_at_fix, robot.odometry()));
-    const auto [v, omega] = follower.command(believed);
-    const Pose2d before = robot.pose();
-    const StepResult r = robot.step(world, v, omega, robot_rng);
-    if (!r.moved) ++contacts;
-    distance += (robot.pose().position() - before.position()).norm();
-    ++step;
-    if (step % 10 == 0) {
-      true_path.push_back(robot.pose());
-      odometry_path.push_back(robot.odometry());
-    }
-
-    // 2D laser at 10 Hz: keep the end points (drawn from the true pose) and check whether any
-    // reading lies on the couch table (it cannot: its top is above the scan plane).
-    if (step % 5 == 0) {
-      const LaserScan<double> scan = laser.scan(world, robot.pose(), laser_rng, robot.time());
-      ++laser_scans;
-      slam.add(scan, robot.odometry(), robot.pose());
-      slam_fix = slam.estimate.back();
-      odometry_at_fix = robot.odometry();
-      if (laser_scans % 4 == 0)
-        for (const Point2d& p : scan.valid_points())
-          laser_points.push_back(robot.pose().transform_point(p));
-      // Which object each beam truly hit, from the simulator's ground truth.
-      for (const RayHit& h : laser.cast(world, robot.pose())) {
-        if (!h.hit() || !couch_table.contains({h.kind, h.index})) continue;
-        (h.kind == SurfaceKind::box ? laser_on_table_top : laser_on_table_legs) += 1;
-      }
-    }
-
-    // Pitching scanner: every 2D scan whose time fell into this control step, turned into 3D
-    // with Eq. (3) of paper 002 and into the world frame with the true pose.
-    const Transform3d to_world = robot_transform(robot.pose());
-    while (pitching.scan_time(next_pitched) <= robot.time()) {
-      const PitchedScan<double> ps =
-          pitching.scan(world, robot.pose(), pitching.scan_time(next_pitched), pitching_rng);
-      ++next_pitched;
-      ++pitched_scans;
-      for (const Point3d& p : pitched_points(ps.scan, ps.pitch, pitching.params().sensor_offset)) {
-        const Point3d g = to_world * p;
-        const auto over = [&](const SceneObject& o) {
-          return g.x() > o.min.x() && g.x() < o.max.x() && g.y() > o.min.y() && g.y() < o.max.y() &&
-                 g.z() > o.min.z() + 0.2 * (o.max.z() - o.min.z());
-        };
-        pitching_on_table_top += over(couch_table) && g.z() > couch_table.max.z() - 0.06;
-        pitching_on_drawer += over(drawer);
-        if (g.z() < -0.05) ++below_floor;  // the descending stair (paper 002 §4.2)
-        if (pitched_scans % 3 == 0 && (g.z() > 0.03 || g.z() < -0.03))
-          pitched_world_points.push_back(g);
-      }
-    }
-
-    // ToF camera at 0.5 Hz: count mixed pixels (depth strictly between neighbours that jump).
-    if (step % 100 == 0) {
-      const DepthImage<double> img = tof.capture(world, robot.pose(), tof_rng, robot.time());
-      ++tof_frames;
-      for (std::size_t row = 0; row < img.height(); ++row)
-        for (std::size_t c = 1; c + 1 < img.width(); ++c) {
-          const double a = img.at(row, c - 1), b = img.at(row, c), d = img.at(row, c + 1);
-          if (std::isfinite(a) && std::isfinite(b) && std::isfinite(d) && std::abs(a - d) > 0.3 &&
-              std::min(a, d) + 0.1 < b && b < std::max(a, d) - 0.1)
-            ++tof_mixed_pixels;
-        }
-    }
-  }
-  true_path.push_back(robot.pose());
-  odometry_path.push_back(robot.odometry());
-  const double odometry_error = (robot.odometry().position() - robot.pose().position()).norm();
-
-  // The picture: world, true path, odometry path, laser end points, 3D points off the floor.
-  std::filesystem::create_directories("demo_out");
-  io::SvgDrawing svg({.size_px = 900});
-  draw_world(svg, world, laser.params().mount.translation().z());
-  svg.layer("pitching scanner points off the floor");
-  std::vector<Point3d> above, below;
-  for (const Point3d& p : pitched_world_points)
-    (p.z() > 0 ? above : below).push_back(p);
-  svg.points(above, {.stroke = "#8e44ad", .opacity = 0.35, .point_radius_px = 0.8});
-  svg.layer("pitching scanner points below the floor");
-  svg.points(below, {.stroke = "#1f618d", .point_radius_px = 1.2});
-  svg.layer("2D laser end points");
-  svg.points(laser_points, {.stroke = "#e74c3c", .opacity = 0.5, .point_radius_px = 0.8});
-  svg.layer("true path").path(true_path, {.stroke = "#27ae60", .stroke_width_px = 2.5});
-  svg.layer("odometry").path(odometry_path, {.stroke = "#2c3e50", .stroke_width_px = 1.5});
-  slam.draw(svg);
-  svg.layer("robot").circle(robot.pose().position(), 0.3, {.stroke = "#27ae60"});
-  svg.pose(robot.pose(), 0.4, {.stroke = "#27ae60", .fill = "#27ae60"});
-  svg.save("demo_out/world.svg");
-
-  // Closed loop: hallway -> the dresser in the kitchen, a corridor blocked after planning.
-  const NavigationResult nav = run_navigation(scene, slam, robot_params, seed + 4);
-
-  const double runtime =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+void print_summary(const Scene& scene, const Tour& tour, const Perception& seen,
+                   const OnlineSlam& slam, const NavigationResult& nav) {
   std::cout << "rangenav demo: tour of the apartment (paper 002 Fig. 2 scene)\n"
-            << "  waypoints reached       " << follower.next << " of " << scene.tour.size()
-            << " in " << robot.time() << " s simulated, " << distance << " m driven, " << contacts
-            << " blocked steps\n"
-            << "  odometry error at end   " << odometry_error << " m\n"
-            << "  2D laser                " << laser_scans << " scans, " << laser_on_table_legs
-            << " readings on the couch table's legs, " << laser_on_table_top
-            << " on its top (above the scan plane)\n"
-            << "  pitching scanner        " << pitched_scans << " scans, " << pitching_on_table_top
-            << " readings on the couch table top, " << pitching_on_drawer << " on the open drawer, "
-            << below_floor << " below the floor (stair)\n"
+            << "  waypoints reached       " << tour.waypoints_reached << " of " << scene.tour.size()
+            << " in " << tour.time << " s simulated, " << tour.distance << " m driven, "
+            << tour.contacts << " blocked steps\n"
+            << "  odometry error at end   " << tour.odometry_error << " m\n"
+            << "  2D laser                " << seen.laser_scans << " scans, "
+            << seen.laser_on_table_legs << " readings on the couch table's legs, "
+            << seen.laser_on_table_top << " on its top (above the scan plane)\n"
+            << "  pitching scanner        " << seen.pitched_scans << " scans, "
+            << seen.pitching_on_table_top << " readings on the couch table top, "
+            << seen.pitching_on_drawer << " on the open drawer, " << seen.below_floor
+            << " below the floor (stair)\n"
             << "  SLAM (2D laser)         " << slam.mapper.map().size() << " map points of "
             << slam.mapper.map().points_offered() << " offered, absolute trajectory error "
-            << slam.ate_rmse() << " m RMS (odometry alone: " << odometry_error << " m at the end), "
-            << slam.cpu_seconds << " s\n"
-            << "  ToF camera              " << tof_frames << " frames, " << tof_mixed_pixels
-            << " mixed pixels at jump edges\n"
+            << slam.ate_rmse() << " m RMS (odometry alone: " << tour.odometry_error
+            << " m at the end), " << slam.cpu_seconds << " s\n"
+            << "  ToF camera              " << seen.tof_frames << " frames, "
+            << seen.tof_mixed_pixels << " mixed pixels at jump edges\n"
             << "  navigation to the " << nav.goal_name << "    "
             << (nav.goal_reached ? "goal reached" : "goal NOT reached") << " in " << nav.time
             << " s, " << nav.distance << " m, " << nav.replans << " re-plans, " << nav.contacts
@@ -607,6 +644,10 @@ int main(int argc, char** argv) {
             << " of " << nav.registrations << " scan registrations rejected\n"
             << "  wrote demo_out/world.svg and demo_out/navigation.svg (in "
             << std::filesystem::current_path().string() << ")\n";
+}
+
+void print_json(const Scene& scene, const Tour& tour, const Perception& seen,
+                const OnlineSlam& slam, const NavigationResult& nav, double runtime) {
   std::printf(
       "{\"demo\": \"00_demo\", \"world\": \"apartment\", \"waypoints_reached\": %zu, "
       "\"waypoints\": %zu, \"sim_time_s\": %.2f, \"distance_m\": %.3f, \"blocked_steps\": %zu, "
@@ -619,11 +660,48 @@ int main(int argc, char** argv) {
       "\"min_clearance_m\": %.3f, \"contacts\": %zu, \"nav_time_s\": %.2f, "
       "\"nav_position_error_m\": %.4f, \"nav_heading_error_deg\": %.2f, \"nav_pose_rmse_m\": %.4f, "
       "\"nav_pose_max_error_m\": %.4f, \"nav_heading_rmse_deg\": %.2f, \"runtime_s\": %.3f}\n",
-      follower.next, scene.tour.size(), robot.time(), distance, contacts, odometry_error,
-      laser_scans, laser_on_table_legs, laser_on_table_top, pitched_scans, pitching_on_table_top,
-      pitching_on_drawer, below_floor, tof_frames, tof_mixed_pixels, slam.ate_rmse(),
-      slam.mapper.map().size(), nav.goal_reached ? "true" : "false", nav.replans, nav.min_clearance,
-      nav.contacts, nav.time, nav.position_error, rad_to_deg(nav.heading_error), nav.pose_rmse,
-      nav.pose_max_error, nav.heading_rmse_deg, runtime);
-  return follower.done() && contacts == 0 && nav.goal_reached && nav.contacts == 0 ? 0 : 1;
+      tour.waypoints_reached, scene.tour.size(), tour.time, tour.distance, tour.contacts,
+      tour.odometry_error, seen.laser_scans, seen.laser_on_table_legs, seen.laser_on_table_top,
+      seen.pitched_scans, seen.pitching_on_table_top, seen.pitching_on_drawer, seen.below_floor,
+      seen.tof_frames, seen.tof_mixed_pixels, slam.ate_rmse(), slam.mapper.map().size(),
+      nav.goal_reached ? "true" : "false", nav.replans, nav.min_clearance, nav.contacts, nav.time,
+      nav.position_error, rad_to_deg(nav.heading_error), nav.pose_rmse, nav.pose_max_error,
+      nav.heading_rmse_deg, runtime);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  if (argc == 3 && std::string_view(argv[1]) == "--docs") write_docs(argv[2]);
+
+  // The robot: a 0.3 m disc up to 1.2 m high, with odometry that overestimates distances by 2 %,
+  // drifts by 0.005 rad/s and is noisy. Everything below is deterministic for the seed.
+  const Scene scene = apartment();
+  DifferentialDriveParams robot_params;
+  robot_params.footprint = Footprint::circle(0.3, 0.02, 1.2);
+  robot_params.odometry = {.v_scale = 0.02,
+                           .omega_scale = 0.0,
+                           .omega_bias = 0.005,
+                           .v_sigma = 0.02,
+                           .omega_sigma = 0.05};
+  const unsigned seed = 20240101;
+
+  // 1. The mapping tour: sense, map online, steer by the map (demo_out/world.svg).
+  OnlineSlam slam;
+  Perception seen;
+  const Tour tour = drive_tour(scene, robot_params, seed, slam, seen);
+  draw_tour(scene, tour, seen, slam);
+
+  // 2. Closed loop: hallway -> the dresser in the kitchen, a corridor blocked after planning
+  //    (demo_out/navigation.svg).
+  const NavigationResult nav = run_navigation(scene, slam, robot_params, seed + 4);
+
+  const double runtime =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  print_summary(scene, tour, seen, slam, nav);
+  print_json(scene, tour, seen, slam, nav, runtime);
+  const bool ok = tour.waypoints_reached == scene.tour.size() && tour.contacts == 0 &&
+                  nav.goal_reached && nav.contacts == 0;
+  return ok ? 0 : 1;
 }

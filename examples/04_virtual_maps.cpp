@@ -151,107 +151,97 @@ std::string json_bools(const std::vector<Target>& targets, const std::vector<boo
   return s + "}";
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  const std::string svg_path = argc > 1 ? argv[1] : "virtual_maps.svg";
-  const sim::Scene scene = sim::apartment();
-  constexpr double half_pi = std::numbers::pi / 2;
-  const std::vector<Target> targets = {
-      {"small_object", "book", {0.8, 2.6, -half_pi}},
-      {"table_top", "couch_table", {3.0, 3.3, -half_pi}},
-      {"drawer", "drawer", {8.35, 3.5, 0.0}},
-      {"stair", "stair", {8.8, 6.0, half_pi}},
-  };
-
-  // The pitching scanner of paper 002 §3.3 (the simulator's default: 1 deg per 13.32 ms scan,
-  // AOI -10..40 deg, pitch axis 0.55 m high), with the LMS 2xx's 5 mm range noise.
+/// The pitching scanner of paper 002 §3.3 (the simulator's default: 1 deg per 13.32 ms scan, AOI
+/// -10..40 deg, pitch axis 0.55 m high), with the LMS 2xx's 5 mm range noise.
+sim::PitchingScannerParams scanner_params() {
   sim::PitchingScannerParams pp;
   pp.noise.sigma = 0.005;
+  return pp;
+}
+
+/// Whether the 2D scan, the obstacle map and the structure map hold an obstacle.
+struct Found {
+  bool scan2d, obstacle_map, structure_map;
+};
+
+/// The robot drives 0.4 m towards `target` at 0.2 m/s, then the scanner nods once more; every
+/// pitched scan updates the obstacle map, every sweep gives a structure map. Each map and a 2D
+/// scan are asked whether they hold the obstacle at its true distance (within 5 cm); both maps go
+/// into row `row` of the drawing (Fig. 6: obstacle map left, structure map right).
+Found approach(const sim::Scene& scene, const Target& target, std::size_t row, std::mt19937& rng,
+               io::SvgDrawing& svg, std::vector<double>& update_seconds) {
+  const sim::PitchingScannerParams pp = scanner_params();
   const sim::PitchingScanner pitching(pp);
-  const sim::LaserScanner2D laser2d;  // SICK S300 at 0.30 m
-  std::mt19937 rng(2024);
-
-  std::vector<bool> in_scan2d, in_obstacle, in_structure;
-  std::vector<double> update_seconds;  // per update; the median is robust to preemption
-  io::SvgDrawing svg;
-  for (std::size_t t = 0; t < targets.size(); ++t) {
-    const Target& target = targets[t];
-    // The robot drives 0.4 m towards its stop pose at 0.2 m/s, then the scanner nods once more.
-    const Pose2d start = compose(target.stop, Pose2d{-0.4, 0.0, 0.0});
-    ObstacleMap<double> obstacle_map;     // 720 bins, corridor [0, 1] m, age-out after 500 moves
-    FloorClassifierParams<double> floor;  // thresholds from the scanner's noise (floor.hpp)
-    floor.range_noise = pp.noise.sigma;
-    PitchingObstacleExtractor<double> extractor(pp.sensor_offset, floor);
-    SweepAssembler<double> sweeps(SweepParams<double>{pp.sensor_offset});
-    LaserScan<double> structure;
-    Pose2d structure_base, pose = start, previous = start;
-    const std::size_t scans =
-        150 + 2 * static_cast<std::size_t>(pitching.nod_period() / pp.scan_period);
-    for (std::size_t k = 0; k < scans; ++k) {
-      const auto scan = pitching.scan(scene.world, pose, pitching.scan_time(k), rng);
-      const auto points = extractor.push(scan, pose);
-      const auto t0 = std::chrono::steady_clock::now();
-      obstacle_map.update(relative(previous, pose), points);  // §4.4: transform, age, replace
-      update_seconds.push_back(
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-      if (sweeps.push(scan, pose)) {
-        structure = structure_scan(sweeps.sweep());
-        structure_base = sweeps.sweep().base_pose;
-      }
-      previous = pose;
-      if (k < 150)
-        pose = sim::DifferentialDriveRobot::integrate(pose, 0.4 / (150 * pp.scan_period), 0.0,
-                                                      pp.scan_period);
+  ObstacleMap<double> obstacle_map;     // 720 bins, corridor [0, 1] m, age-out after 500 moves
+  FloorClassifierParams<double> floor;  // thresholds from the scanner's noise (floor.hpp)
+  floor.range_noise = pp.noise.sigma;
+  PitchingObstacleExtractor<double> extractor(pp.sensor_offset, floor);
+  SweepAssembler<double> sweeps(SweepParams<double>{pp.sensor_offset});
+  LaserScan<double> structure;
+  const Pose2d start = compose(target.stop, Pose2d{-0.4, 0.0, 0.0});
+  Pose2d structure_base, pose = start, previous = start;
+  const std::size_t scans =
+      150 + 2 * static_cast<std::size_t>(pitching.nod_period() / pp.scan_period);
+  for (std::size_t k = 0; k < scans; ++k) {
+    const auto scan = pitching.scan(scene.world, pose, pitching.scan_time(k), rng);
+    const auto points = extractor.push(scan, pose);  // floor removed, stairs as obstacles
+    const auto t0 = std::chrono::steady_clock::now();
+    obstacle_map.update(relative(previous, pose), points);  // §4.4: transform, age, replace
+    update_seconds.push_back(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    if (sweeps.push(scan, pose)) {  // a nod completed: its structure map (§4.3)
+      structure = structure_scan(sweeps.sweep());
+      structure_base = sweeps.sweep().base_pose;
     }
-    const LaserScan<double> scan2d = laser2d.scan(scene.world, pose, rng);
-
-    const double truth = true_distance(scene, target.name, pose);
-    const double truth_structure = true_distance(scene, target.name, structure_base);
-    const double d_obstacle = ahead(obstacle_map), d_scan = ahead(scan2d);
-    const double d_structure = ahead(structure);
-    in_obstacle.push_back(std::abs(d_obstacle - truth) <= 0.05);
-    in_scan2d.push_back(std::abs(d_scan - truth) <= 0.05);
-    in_structure.push_back(std::abs(d_structure - truth_structure) <= 0.05);
-    std::printf(
-        "%-12s %-12s true %.3f m | obstacle map %.3f m (%s) | 2D scan %.3f m (%s) | "
-        "structure map %.3f m (%s)\n",
-        target.kind, target.name, truth, d_obstacle, in_obstacle.back() ? "found" : "missed",
-        d_scan, in_scan2d.back() ? "found" : "missed", d_structure,
-        in_structure.back() ? "found" : "rejected");
-
-    // Fig. 6: obstacle map beside structure map, in the robot frame, one row per target.
-    const Point2d row(0.0, -9.5 * static_cast<double>(t));
-    const Point2d right(9.5, 0.0);
-    std::vector<Point2d> obs, str, las;  // clipped to 4.5 m around the robot
-    const auto add = [](std::vector<Point2d>& out, const Point2d& at, const auto& cloud) {
-      for (const auto& p : cloud)
-        if (p.norm() < 4.5) out.push_back(at + p);
-    };
-    add(obs, row, obstacle_map.valid_points());
-    add(str, row + right, structure.valid_points());
-    add(las, row, scan2d.valid_points());
-    svg.layer("2D scan at 0.30 m").points(las, {.stroke = "#9ecae1", .point_radius_px = 1.0});
-    svg.layer("obstacle map").points(obs, {.stroke = "crimson"});
-    svg.layer("structure map").points(str, {.stroke = "#2171b5"});
-    svg.layer("robot").pose(Pose2d{row.x(), row.y(), 0.0}, 0.4, {.stroke = "black"});
-    svg.layer("robot").pose(Pose2d{row.x() + right.x(), row.y(), 0.0}, 0.4, {.stroke = "black"});
+    previous = pose;
+    if (k < 150)
+      pose = sim::DifferentialDriveRobot::integrate(pose, 0.4 / (150 * pp.scan_period), 0.0,
+                                                    pp.scan_period);
   }
-  svg.save(svg_path);
-  std::printf("wrote %s (obstacle maps left, structure maps right, one row per obstacle)\n",
-              svg_path.c_str());
+  const LaserScan<double> scan2d = sim::LaserScanner2D().scan(scene.world, pose, rng);  // 0.30 m
 
-  // §3.3: the area of interest adapted to velocity. The scanner's pitch axis is 0.55 m high;
-  // at 0.5 m/s and above only the virtual corridor [0, 1] m from d_min = 1 m on is scanned.
+  const double truth = true_distance(scene, target.name, pose);
+  const double truth_structure = true_distance(scene, target.name, structure_base);
+  const double d_obstacle = ahead(obstacle_map), d_scan = ahead(scan2d),
+               d_structure = ahead(structure);
+  const Found found{std::abs(d_scan - truth) <= 0.05, std::abs(d_obstacle - truth) <= 0.05,
+                    std::abs(d_structure - truth_structure) <= 0.05};
+  std::printf(
+      "%-12s %-12s true %.3f m | obstacle map %.3f m (%s) | 2D scan %.3f m (%s) | structure map "
+      "%.3f m (%s)\n",
+      target.kind, target.name, truth, d_obstacle, found.obstacle_map ? "found" : "missed", d_scan,
+      found.scan2d ? "found" : "missed", d_structure, found.structure_map ? "found" : "rejected");
+
+  const Point2d at(0.0, -9.5 * static_cast<double>(row)), right(9.5, 0.0);
+  std::vector<Point2d> obs, str, las;  // clipped to 4.5 m around the robot
+  const auto add = [](std::vector<Point2d>& out, const Point2d& offset, const auto& cloud) {
+    for (const auto& p : cloud)
+      if (p.norm() < 4.5) out.push_back(offset + p);
+  };
+  add(obs, at, obstacle_map.valid_points());
+  add(str, at + right, structure.valid_points());
+  add(las, at, scan2d.valid_points());
+  svg.layer("2D scan at 0.30 m").points(las, {.stroke = "#9ecae1", .point_radius_px = 1.0});
+  svg.layer("obstacle map").points(obs, {.stroke = "crimson"});
+  svg.layer("structure map").points(str, {.stroke = "#2171b5"});
+  svg.layer("robot").pose(Pose2d{at.x(), at.y(), 0.0}, 0.4, {.stroke = "black"});
+  svg.layer("robot").pose(Pose2d{at.x() + right.x(), at.y(), 0.0}, 0.4, {.stroke = "black"});
+  return found;
+}
+
+/// §3.3: the area of interest adapted to velocity. The pitch axis is 0.55 m high; at 0.5 m/s and
+/// above only the virtual corridor [0, 1] m from d_min = 1 m on is scanned. Returns the runs'
+/// JSON array.
+std::string area_of_interest_runs(std::mt19937& rng) {
   const AreaOfInterestParams<double> aoi_params;
-  const double sensor_height = pp.sensor_offset.z();
+  const double sensor_height = scanner_params().sensor_offset.z();
   std::vector<AoiRun> runs;
   for (const double v : {0.15, 0.3, 0.6})
     runs.push_back(drive_towards_box(v, area_of_interest(v, sensor_height, aoi_params), true, rng));
-  runs.push_back(
+  runs.push_back(  // the top speed with the standstill pitch range, for contrast
       drive_towards_box(0.6, area_of_interest(0.0, sensor_height, aoi_params), false, rng));
   std::printf("area of interest adapted to velocity (§3.3), 3-cm box ahead in a corridor:\n");
-  std::string aoi_json = "[";
+  std::string json = "[";
   for (const AoiRun& r : runs) {
     std::printf(
         "  %.2f m/s %-9s pitch %+6.1f..%+5.1f deg, nod %.2f s = %.2f m driven, floor seen from "
@@ -263,18 +253,48 @@ int main(int argc, char** argv) {
                   "%s{\"speed\": %.2f, \"adapted\": %s, \"pitch_min_deg\": %.1f, "
                   "\"pitch_max_deg\": %.1f, \"nod_s\": %.2f, \"look_ahead_m\": %.2f, "
                   "\"first_seen_m\": %.2f, \"longest_gap_m\": %.2f}",
-                  aoi_json.size() > 1 ? ", " : "", r.speed, r.adapted ? "true" : "false",
+                  json.size() > 1 ? ", " : "", r.speed, r.adapted ? "true" : "false",
                   rad_to_deg(r.aoi.min), rad_to_deg(r.aoi.max), r.nod_s, r.look_ahead_m,
                   r.first_seen_m, r.longest_gap_m);
-    aoi_json += buf;
+    json += buf;
   }
-  aoi_json += "]";
+  return json + "]";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string svg_path = argc > 1 ? argv[1] : "virtual_maps.svg";
+  const sim::Scene scene = sim::apartment();
+  constexpr double half_pi = std::numbers::pi / 2;
+  const std::vector<Target> targets = {
+      // the obstacle classes of Fig. 2
+      {"small_object", "book", {0.8, 2.6, -half_pi}},
+      {"table_top", "couch_table", {3.0, 3.3, -half_pi}},
+      {"drawer", "drawer", {8.35, 3.5, 0.0}},
+      {"stair", "stair", {8.8, 6.0, half_pi}},
+  };
+  std::mt19937 rng(2024);
+
+  std::vector<bool> in_scan2d, in_obstacle, in_structure;
+  std::vector<double> update_seconds;  // per update; the median is robust to preemption
+  io::SvgDrawing svg;
+  for (std::size_t t = 0; t < targets.size(); ++t) {
+    const Found f = approach(scene, targets[t], t, rng, svg, update_seconds);
+    in_scan2d.push_back(f.scan2d);
+    in_obstacle.push_back(f.obstacle_map);
+    in_structure.push_back(f.structure_map);
+  }
+  svg.save(svg_path);
+  std::printf("wrote %s (obstacle maps left, structure maps right, one row per obstacle)\n",
+              svg_path.c_str());
+
+  const std::string aoi_json = area_of_interest_runs(rng);
   std::nth_element(update_seconds.begin(),
                    update_seconds.begin() + static_cast<std::ptrdiff_t>(update_seconds.size() / 2),
                    update_seconds.end());
   const double update_us = 1e6 * update_seconds[update_seconds.size() / 2];
-  // The AOI runs as JSON of their own; the final line holds exactly the keys of issue 5.
-  std::printf("{\"aoi\": %s}\n", aoi_json.c_str());
+  std::printf("{\"aoi\": %s}\n", aoi_json.c_str());  // the AOI runs; the last line: the maps
   std::printf(
       "{\"scan2d\": %s, \"obstacle_map\": %s, \"structure_map\": %s, \"update_us\": %.2f}\n",
       json_bools(targets, in_scan2d).c_str(), json_bools(targets, in_obstacle).c_str(),

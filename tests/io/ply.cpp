@@ -213,7 +213,7 @@ TEST_CASE("ply rejects malformed and unsupported files with messages naming the 
         prefix + "line 10: more data lines than the header's elements");
   CHECK(with("ply\nformat ascii 1.0\n" + xyz_props + "element face 1\nproperty list uchar int v\n" +
              "end_header\n1 2 3\n4 5 6\n3 1 2\n") ==
-        prefix + "line 12: face 0 has 3 values but its properties need 4");
+        prefix + "line 12: face 0: list 'v' has 3 items but the line holds 2 more values");
 
   // binary data
   CHECK(with("ply\nformat binary_little_endian 1.0\n" + xyz + std::string(20, '\0')) ==

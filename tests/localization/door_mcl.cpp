@@ -186,9 +186,9 @@ TEST_CASE("door mcl: doors partially open into the corridor", "[localization][do
   // the view along the walls and to the far end; standard MCL's map has only the walls there and
   // pulls the estimate towards poses that put the leaves' readings on them. Measured here (the
   // true doors with the range [0, 90 deg]): standard MCL 0.39 m mean, door-aware 0.037 m (max
-  // 0.17 m); with the detected doors (range [0, 44 deg], examples/07_doors --into-corridor, seeds
-  // 1-3) 0.37-0.38 m and 0.016-0.018 m, where swung into the offices they are 0.063-0.067 m and
-  // 0.013 m.
+  // 0.17 m); with the detected doors (range [0, 44 deg], lesson 07's tracking with the doors
+  // swung into the corridor, seeds 1-3) 0.37-0.38 m and 0.016-0.018 m, where swung into the
+  // offices they are 0.063-0.067 m and 0.013 m.
   const Comparison c = compare(deg_to_rad(30.0), 2, -1);
   WARN("doors open 30 deg into the corridor: standard MCL mean "
        << c.mcl_mean << " m, door-aware mean " << c.door_mean << " m (max " << c.door_max << " m)");
@@ -238,10 +238,10 @@ TEST_CASE("door mcl: global localization from a uniform prior over the free cell
   // east, in the corridor with its copier alcove (the plain one is symmetric under a half turn
   // with closed doors). The likelihood field is widened to sigma_hit = 0.8 m for the spread-out
   // belief (with the tracking default 0.2 m the first scan keeps only the best-aligned aliased
-  // poses, see benchmarks/README.md "Global-localization success"). The run is 07_doors
-  // --global's: measured, seeds 100-109 converge in 9 of 10 runs (103 ends on the half-turn
-  // image), as its table says; seeds 100-102 are checked here. On a static map built with the
-  // doors closed (offices never seen) instead, only 2 of 10 converged.
+  // poses, see docs/benchmarks.md "Global localization"). The run is
+  // tools/doors_global_localization's: measured, seeds 100-109 converge in 9 of 10 runs (103 ends
+  // on the half-turn image), as its table says; seeds 100-102 are checked here. On a static map
+  // built with the doors closed (offices never seen) instead, only 2 of 10 converged.
   const sim::Scene scene = sim::office_corridor(std::vector<double>(8, deg_to_rad(30.0)), true);
   const auto [grid, doors] = detected_map(true);
   REQUIRE(doors.size() == 8);

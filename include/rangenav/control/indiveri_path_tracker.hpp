@@ -51,6 +51,7 @@ struct IndiveriPathTrackerParams {
   double lookahead = 1.5;               ///< blocked check: how far ahead along the path (m)
   std::size_t min_blocking_points = 2;  ///< blocked check: points needed to call it blocked
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     detail::require_positive(where, "params.speed", speed);
     detail::require_positive(where, "params.regain.h", regain.h);
@@ -83,12 +84,16 @@ struct TrackerCommand {
   std::uint32_t blocked_edge{LocalFramePath::no_edge};  ///< graph edge of the blocked segment
 };
 
+/// Follows a LocalFramePath with Indiveri's law (Eq. 7 of paper 000) segment by segment, and
+/// checks the path ahead against a scan (see step()).
 class IndiveriPathTracker {
  public:
+  /// A tracker with these parameters and no path; throws invalid_argument for invalid ones.
   explicit IndiveriPathTracker(const IndiveriPathTrackerParams& params = {}) : params_(params) {
     params_.validate("IndiveriPathTracker");
   }
 
+  /// The parameters.
   [[nodiscard]] const IndiveriPathTrackerParams& params() const { return params_; }
 
   /// Starts tracking `path` from its first segment.
@@ -96,7 +101,9 @@ class IndiveriPathTracker {
     path_ = std::move(path);
     segment_ = 0;
   }
+  /// The path being tracked.
   [[nodiscard]] const LocalFramePath& path() const { return path_; }
+  /// The index of the segment being tracked.
   [[nodiscard]] std::size_t current_segment() const { return segment_; }
 
   /// One control step for the robot at `pose` (map frame). Throws invalid_argument without a

@@ -19,6 +19,7 @@
 
 namespace rangenav {
 
+/// Gains and limits of Indiveri's pose controller (paper 003 §2.2.3).
 struct IndiveriPoseControllerParams {
   double gamma = 0.5;                ///< v = gamma e (1/s), > 0
   double h = 2.0;                    ///< > 1
@@ -28,6 +29,8 @@ struct IndiveriPoseControllerParams {
   double position_tolerance = 0.02;  ///< reached: e below this (m) ...
   double heading_tolerance = 0.035;  ///< ... and |phi| below this (rad, 2 degrees)
 
+  /// Throws invalid_argument unless gamma > 0, h > 1, 2 < beta < h + 1 and the limits and
+  /// tolerances are positive.
   void validate(std::string_view where) const {
     detail::require_positive(where, "params.gamma", gamma);
     detail::require_finite(where, "params.h", h);
@@ -44,6 +47,7 @@ struct IndiveriPoseControllerParams {
   }
 };
 
+/// One step of the pose controller: the command and the polar coordinates it came from.
 struct PoseControlCommand {
   double v{0.0};        ///< linear velocity (m/s), never negative
   double omega{0.0};    ///< angular velocity (rad/s)
@@ -54,13 +58,17 @@ struct PoseControlCommand {
   bool reached{false};  ///< within position_tolerance and heading_tolerance
 };
 
+/// Drives a unicycle to a target pose forward only, without cusps (paper 003 §2.2.3):
+/// v = gamma e, curvature c = sin(alpha) / e + h theta / e sin(alpha) / alpha + beta alpha / e.
 class IndiveriPoseController {
  public:
+  /// A controller with these parameters; throws invalid_argument for invalid ones.
   explicit IndiveriPoseController(const IndiveriPoseControllerParams& params = {})
       : params_(params) {
     params_.validate("IndiveriPoseController");
   }
 
+  /// The parameters.
   [[nodiscard]] const IndiveriPoseControllerParams& params() const { return params_; }
 
   /// One control step for the robot at `pose` driving to `target` (both in the map frame).

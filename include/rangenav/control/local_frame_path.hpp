@@ -20,8 +20,8 @@ namespace rangenav {
 
 /// One straight segment of a path and its local frame.
 struct PathSegment {
-  Point2d start;
-  Point2d end;
+  Point2d start;        ///< where the segment starts (map frame)
+  Point2d end;          ///< where it ends
   double length{0.0};   ///< |end - start| (m)
   double heading{0.0};  ///< direction of the frame's x axis (rad)
   /// The graph edge the segment follows (VoronoiPathGraph::npos when none), so a blocked segment
@@ -40,8 +40,11 @@ struct PathSegment {
   }
 };
 
+/// A path as a chain of local frames, one per straight segment with its x axis along it
+/// (paper 000 Fig. 6b).
 class LocalFramePath {
  public:
+  /// The edge of a segment that follows no graph edge.
   static constexpr std::uint32_t no_edge = std::numeric_limits<std::uint32_t>::max();
 
   LocalFramePath() = default;
@@ -80,11 +83,17 @@ class LocalFramePath {
       : LocalFramePath(std::span<const Point2d>(path.waypoints),
                        std::span<const std::uint32_t>(path.edges)) {}
 
+  /// The segments, in order.
   [[nodiscard]] const std::vector<PathSegment>& segments() const { return segments_; }
+  /// Segment i.
   [[nodiscard]] const PathSegment& segment(std::size_t i) const { return segments_[i]; }
+  /// Number of segments.
   [[nodiscard]] std::size_t size() const { return segments_.size(); }
+  /// True for a path without segments.
   [[nodiscard]] bool empty() const { return segments_.empty(); }
+  /// Total length (m).
   [[nodiscard]] double length() const { return length_; }
+  /// The end of the last segment (the path must not be empty).
   [[nodiscard]] Point2d goal() const { return segments_.back().end; }
 
  private:

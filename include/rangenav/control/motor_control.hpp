@@ -72,7 +72,9 @@ class SpeedPwmTable {
     return std::copysign(pwm_[i - 1] + t * (pwm_[i] - pwm_[i - 1]), speed);
   }
 
+  /// The largest speed in the table (m/s).
   [[nodiscard]] double max_speed() const { return speed_.back(); }
+  /// The largest PWM in the table.
   [[nodiscard]] double max_pwm() const { return pwm_.back(); }
 
  private:
@@ -89,6 +91,7 @@ class SpeedPwmTable {
   std::vector<double> speed_;
 };
 
+/// Parameters of MotorController (paper 003 §2.1).
 struct MotorControllerParams {
   double dt = 0.01;           ///< control period (s); Kurt3D's loop runs at 100 Hz
   double feed_forward = 1.0;  ///< F_v, 1 "according to the design of the lookup table"
@@ -102,6 +105,7 @@ struct MotorControllerParams {
   double pwm_limit = 1023.0;  ///< output band: |pwm| <= pwm_limit (10-bit PWM on Kurt3D)
   double max_pwm_step = std::numeric_limits<double>::infinity();  ///< |change| per cycle
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     detail::require_positive(where, "params.dt", dt);
     detail::require_positive(where, "params.feed_forward", feed_forward);
@@ -120,12 +124,16 @@ struct MotorControllerParams {
 /// Feed-forward + lookup table + PI controller of one wheel (paper 003 Fig. 1, right).
 class MotorController {
  public:
+  /// A controller of the wheel with this speed -> PWM table; throws invalid_argument for invalid
+  /// parameters.
   explicit MotorController(SpeedPwmTable table, const MotorControllerParams& params = {})
       : table_(std::move(table)), params_(params) {
     params_.validate("MotorController");
   }
 
+  /// The parameters.
   [[nodiscard]] const MotorControllerParams& params() const { return params_; }
+  /// The wheel's speed -> PWM table.
   [[nodiscard]] const SpeedPwmTable& table() const { return table_; }
 
   /// The open-loop part: with s = F_v v + side F_omega omega, T^-1(s + offset) signed like s;
@@ -155,10 +163,12 @@ class MotorController {
     return u;
   }
 
+  /// Clears the integral term and the output (e.g. after an emergency stop).
   void reset() {
     integral_ = 0.0;
     output_ = 0.0;
   }
+  /// The last PWM output.
   [[nodiscard]] double output() const { return output_; }
 
  private:

@@ -39,6 +39,7 @@ struct VirtualRoadwayParams {
   double turn_rate = 0.8;      ///< |omega| while stopped and turning on the spot (rad/s)
   double backoff_speed = 0.0;  ///< > 0: back off at this speed instead of turning (m/s)
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     detail::require_non_negative(where, "roadway.half_width", half_width);
     detail::require_non_negative(where, "roadway.front_offset", front_offset);
@@ -60,6 +61,7 @@ struct FreeSpaceParams {
   double dto_max = 6.0;      ///< inflection point of f_d (m), the roadway's dto_max in the paper
   double influence = 0.3;    ///< omega += influence * alpha_free (1/s); "kept rather small"
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     detail::require_positive(where, "free_space.angle_scale", angle_scale);
     detail::require_positive(where, "free_space.dto_min", dto_min);
@@ -84,6 +86,7 @@ struct FreeSpaceParams {
 /// Accumulates Eq. (5) of paper 002 reading by reading.
 class FreeSpaceOrientation {
  public:
+  /// An accumulator with these parameters; throws invalid_argument for invalid ones.
   explicit FreeSpaceOrientation(const FreeSpaceParams& params = {}) : params_(params) {
     params_.validate("FreeSpaceOrientation");
   }
@@ -167,16 +170,18 @@ enum class StopTurn {
                       ///< where it wants to turn; turning away and back would livelock with it
 };
 
+/// Parameters of the three reactive behaviours of paper 002 §5.
 struct ReactiveParams {
-  VirtualRoadwayParams roadway{};
-  FreeSpaceParams free_space{};
-  bool use_free_space = true;  ///< apply the third behaviour
-  StopTurn stop_turn = StopTurn::toward_free_space;
+  VirtualRoadwayParams roadway{};  ///< virtual roadway: speed scaling and stop (paper 003 §2.2.2)
+  FreeSpaceParams free_space{};    ///< free-space orientation (Eq. 5-6 of paper 002)
+  bool use_free_space = true;      ///< apply the third behaviour
+  StopTurn stop_turn = StopTurn::toward_free_space;  ///< which way a stopped robot turns
 };
 
+/// The command after the reactive behaviours, and what they saw.
 struct ReactiveCommand {
-  double v{0.0};
-  double omega{0.0};
+  double v{0.0};                                        ///< linear velocity (m/s)
+  double omega{0.0};                                    ///< angular velocity (rad/s)
   double dto{std::numeric_limits<double>::infinity()};  ///< roadway distance (m)
   std::optional<double> alpha_free;                     ///< free-space orientation (rad)
   bool stopped{false};  ///< below dto_min: turning on the spot or backing off
@@ -189,10 +194,12 @@ struct ReactiveCommand {
 /// apply() updates that one bit of state; reset() forgets it.
 class ReactiveBehaviours {
  public:
+  /// Behaviours with these parameters; throws invalid_argument for invalid ones.
   explicit ReactiveBehaviours(const ReactiveParams& params = {}) : params_(params) {
     params_.roadway.validate("ReactiveBehaviours");
     params_.free_space.validate("ReactiveBehaviours");
   }
+  /// The parameters.
   [[nodiscard]] const ReactiveParams& params() const { return params_; }
   /// Forgets the sense of turn of a stop (e.g. after a new goal).
   void reset() { turn_sense_ = 0; }

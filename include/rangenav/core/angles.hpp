@@ -26,11 +26,13 @@ template <std::floating_point Scalar>
 }
 
 template <std::floating_point Scalar>
+/// Degrees to radians.
 [[nodiscard]] constexpr Scalar deg_to_rad(Scalar degrees) {
   return degrees * std::numbers::pi_v<Scalar> / Scalar(180);
 }
 
 template <std::floating_point Scalar>
+/// Radians to degrees.
 [[nodiscard]] constexpr Scalar rad_to_deg(Scalar radians) {
   return radians * Scalar(180) / std::numbers::pi_v<Scalar>;
 }

@@ -20,9 +20,12 @@ namespace rangenav {
 using Rgba = std::array<std::uint8_t, 4>;
 
 template <int D, class Scalar = double>
+/// A cloud of D-dimensional points with optional per-point attributes (see the file comment).
 struct Cloud {
+  /// The point type, Point<D, Scalar>.
   using point_type = Point<D, Scalar>;
 
+  /// The points; NaN where an organised cloud has no reading.
   std::vector<point_type> points;
   std::vector<float> intensities;   ///< empty, or one per point
   std::vector<Rgba> colors;         ///< empty, or one per point
@@ -30,11 +33,17 @@ struct Cloud {
   std::size_t width = 0;            ///< points per row; equals size() when not organised
   std::size_t height = 1;           ///< rows; > 1 means organised (row-major)
 
+  /// Number of points (width x height).
   [[nodiscard]] std::size_t size() const { return points.size(); }
+  /// True when the cloud has no points.
   [[nodiscard]] bool empty() const { return points.empty(); }
+  /// True when the points form an image of height > 1 rows (row-major).
   [[nodiscard]] bool is_organized() const { return height > 1; }
+  /// True when there is one intensity per point.
   [[nodiscard]] bool has_intensities() const { return !intensities.empty(); }
+  /// True when there is one colour per point.
   [[nodiscard]] bool has_colors() const { return !colors.empty(); }
+  /// True when there is one normal per point.
   [[nodiscard]] bool has_normals() const { return !normals.empty(); }
 
   /// The point at (row, col) of an organised cloud.
@@ -59,16 +68,24 @@ struct Cloud {
   }
 };
 
+/// A 3D cloud in double precision.
 using Cloud3d = Cloud<3, double>;
+/// A 3D cloud in single precision (what PCL's PointXYZ files hold).
 using Cloud3f = Cloud<3, float>;
+/// A 2D cloud in double precision.
 using Cloud2d = Cloud<2, double>;
 
 namespace traits {
 template <int D, class S>
+/// Cloud is a PointCloud over all its points (NaN points of an organised cloud included).
 struct cloud_access<Cloud<D, S>> {
+  /// The cloud's dimension D.
   static constexpr int dimension = D;
+  /// The points' scalar type.
   using Scalar = S;
+  /// Number of points.
   static std::size_t size(const Cloud<D, S>& c) { return c.points.size(); }
+  /// The i-th point.
   static const Point<D, S>& point(const Cloud<D, S>& c, std::size_t i) { return c.points[i]; }
 };
 }  // namespace traits

@@ -18,18 +18,21 @@ namespace rangenav {
 /// Base class of every exception rangenav throws.
 class error : public std::runtime_error {
  public:
+  /// An error with the message `what` (rangenav's messages start with "rangenav: ").
   explicit error(const std::string& what) : std::runtime_error(what) {}
 };
 
 /// A function argument violates its documented contract.
 class invalid_argument : public error {
  public:
+  /// An invalid-argument error with the message `what`, which names the argument and its value.
   explicit invalid_argument(const std::string& what) : error(what) {}
 };
 
 /// A file could not be opened, or its content is malformed (the message names file and line).
 class io_error : public error {
  public:
+  /// An I/O error with the message `what`, which names the file and, for text, the line.
   explicit io_error(const std::string& what) : error(what) {}
 };
 

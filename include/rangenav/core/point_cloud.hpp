@@ -32,9 +32,13 @@ template <class P>
 struct point_access;
 
 template <class S, int D, int Options, int MaxRows, int MaxCols>
+/// Fixed-size Eigen column vectors of dimension 2 or 3 are points.
 requires(D == 2 || D == 3) struct point_access<Eigen::Matrix<S, D, 1, Options, MaxRows, MaxCols>> {
+  /// The point's dimension D.
   static constexpr int dimension = D;
+  /// The point's scalar type.
   using Scalar = S;
+  /// The point itself.
   static const Eigen::Matrix<S, D, 1, Options, MaxRows, MaxCols>& get(
       const Eigen::Matrix<S, D, 1, Options, MaxRows, MaxCols>& p) {
     return p;
@@ -65,10 +69,15 @@ requires(!is_eigen_dense<C>::value && std::ranges::random_access_range<const C> 
          std::ranges::sized_range<const C> &&
          RegisteredPoint<
              std::remove_cvref_t<std::ranges::range_value_t<const C>>>) struct cloud_access<C> {
+  /// The element type of the range.
   using point_type = std::remove_cvref_t<std::ranges::range_value_t<const C>>;
+  /// The dimension of the registered point type.
   static constexpr int dimension = point_access<point_type>::dimension;
+  /// The scalar type of the registered point type.
   using Scalar = typename point_access<point_type>::Scalar;
+  /// Number of points (the range's size).
   static std::size_t size(const C& c) { return static_cast<std::size_t>(std::ranges::size(c)); }
+  /// The i-th point as an Eigen vector (or a reference to one).
   static decltype(auto) point(const C& c, std::size_t i) {
     return point_access<point_type>::get(
         std::ranges::begin(c)[static_cast<std::ranges::range_difference_t<const C>>(i)]);
@@ -80,10 +89,15 @@ template <class S, int D, int Options, int MaxRows, int MaxCols>
 requires(
     D == 2 ||
     D == 3) struct cloud_access<Eigen::Matrix<S, D, Eigen::Dynamic, Options, MaxRows, MaxCols>> {
+  /// The matrix type: D rows, one point per column.
   using matrix_type = Eigen::Matrix<S, D, Eigen::Dynamic, Options, MaxRows, MaxCols>;
+  /// The matrix's row count D.
   static constexpr int dimension = D;
+  /// The matrix's scalar type.
   using Scalar = S;
+  /// Number of points (columns).
   static std::size_t size(const matrix_type& c) { return static_cast<std::size_t>(c.cols()); }
+  /// The i-th column.
   static Point<D, S> point(const matrix_type& c, std::size_t i) {
     return c.col(static_cast<Eigen::Index>(i));
   }

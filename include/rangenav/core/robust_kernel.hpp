@@ -34,6 +34,7 @@ enum class RobustKernelType {
   geman_mcclure  ///< bounded cost; outliers' weight falls as 1/s²
 };
 
+/// The kernel's name: "none", "huber", "cauchy" or "geman_mcclure".
 [[nodiscard]] constexpr std::string_view to_string(RobustKernelType type) {
   switch (type) {
     case RobustKernelType::none:
@@ -51,16 +52,20 @@ enum class RobustKernelType {
 /// A robust kernel ρ of a squared residual s and its IRLS weight ρ'(s) (formulas above).
 template <std::floating_point Scalar = double>
 struct RobustKernel {
+  /// Which M-estimator this is.
   RobustKernelType type = RobustKernelType::none;
   /// The scale δ: the residual (in the units of √s) where the kernel departs from least squares.
   Scalar delta = Scalar(1);
 
+  /// A Huber kernel of scale `d`.
   [[nodiscard]] static constexpr RobustKernel huber(Scalar d) {
     return {RobustKernelType::huber, d};
   }
+  /// A Cauchy kernel of scale `d`.
   [[nodiscard]] static constexpr RobustKernel cauchy(Scalar d) {
     return {RobustKernelType::cauchy, d};
   }
+  /// A Geman-McClure kernel of scale `d`.
   [[nodiscard]] static constexpr RobustKernel geman_mcclure(Scalar d) {
     return {RobustKernelType::geman_mcclure, d};
   }

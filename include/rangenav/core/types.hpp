@@ -20,20 +20,31 @@ using Point = Eigen::Matrix<Scalar, D, 1>;
 template <int D, class Scalar = double>
 using Transform = Eigen::Transform<Scalar, D, Eigen::Isometry>;
 
+/// A 2D point in double precision.
 using Point2d = Point<2, double>;
+/// A 3D point in double precision.
 using Point3d = Point<3, double>;
+/// A 2D point in single precision.
 using Point2f = Point<2, float>;
+/// A 3D point in single precision.
 using Point3f = Point<3, float>;
+/// A planar rigid transform in double precision (Eigen::Isometry2d).
 using Transform2d = Transform<2, double>;
+/// A 3D rigid transform in double precision (Eigen::Isometry3d).
 using Transform3d = Transform<3, double>;
+/// A planar rigid transform in single precision.
 using Transform2f = Transform<2, float>;
+/// A 3D rigid transform in single precision.
 using Transform3f = Transform<3, float>;
 
 /// A planar pose (x, y, theta) with theta in radians. Compose with `*`, invert with inverse().
 template <std::floating_point Scalar = double>
 struct Pose2 {
+  /// m, along the parent frame's x axis.
   Scalar x{0};
+  /// m, along the parent frame's y axis.
   Scalar y{0};
+  /// rad, heading from the parent's x axis, counter-clockwise.
   Scalar theta{0};
 
   /// The pose as a rigid transform that maps points from the pose's frame into the parent frame.
@@ -50,6 +61,7 @@ struct Pose2 {
     return {t.translation().x(), t.translation().y(), std::atan2(r(1, 0), r(0, 0))};
   }
 
+  /// The position (x, y).
   [[nodiscard]] Point<2, Scalar> position() const { return {x, y}; }
 
   /// Maps a point given in this pose's frame into the parent frame.
@@ -61,7 +73,9 @@ struct Pose2 {
   friend bool operator==(const Pose2&, const Pose2&) = default;
 };
 
+/// A planar pose in double precision.
 using Pose2d = Pose2<double>;
+/// A planar pose in single precision.
 using Pose2f = Pose2<float>;
 
 /// SE(2) composition a ⊕ b: the pose b (given in a's frame) expressed in a's parent frame.
@@ -72,6 +86,7 @@ template <std::floating_point Scalar>
 }
 
 template <std::floating_point Scalar>
+/// compose(a, b).
 [[nodiscard]] Pose2<Scalar> operator*(const Pose2<Scalar>& a, const Pose2<Scalar>& b) {
   return compose(a, b);
 }

@@ -122,6 +122,7 @@ struct FloorClassifierParams {
     return {std::max(min_height, noise), std::max(step_height, noise)};
   }
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where = "FloorClassifierParams") const {
     detail::require_non_negative(where, "floor_band", floor_band);
     detail::require_positive(where, "step_height", step_height);

@@ -18,6 +18,7 @@
 
 namespace rangenav {
 
+/// Parameters of the look-at point of Eq. (16) of paper 002.
 template <std::floating_point Scalar = double>
 struct GazeParams {
   Scalar alpha{1};    ///< α, scale of the d_min term (the paper does not scale: 1)
@@ -25,6 +26,7 @@ struct GazeParams {
   Scalar gamma{1};    ///< γ, s: offset along the velocity (>= 1 in the paper)
   Scalar d_min{0.5};  ///< m, smallest distance the camera can see (its lowest tilt)
 
+  /// Throws invalid_argument for a non-finite parameter or a negative d_min.
   void validate(std::string_view where = "GazeParams") const {
     detail::require_finite(where, "alpha", alpha);
     detail::require_finite(where, "beta", beta);
@@ -56,10 +58,11 @@ template <std::floating_point Scalar>
 /// frame) towards `target`.
 template <std::floating_point Scalar>
 struct PanTilt {
-  Scalar pan{0};
-  Scalar tilt{0};
+  Scalar pan{0};   ///< rad about the camera mount's z axis, positive turns left
+  Scalar tilt{0};  ///< rad, positive looks down
 };
 
+/// The pan and tilt that point a camera at `camera` (robot frame) towards `target`.
 template <std::floating_point Scalar>
 [[nodiscard]] PanTilt<Scalar> look_at(const Point<3, Scalar>& camera,
                                       const Point<3, Scalar>& target) {

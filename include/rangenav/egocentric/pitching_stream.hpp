@@ -40,25 +40,27 @@ namespace rangenav {
 /// A range of pitch angles (rad; positive looks down, Eq. 3): min is the most upward.
 template <std::floating_point Scalar = double>
 struct PitchInterval {
-  Scalar min{0};
-  Scalar max{0};
+  Scalar min{0};  ///< rad, the most upward pitch
+  Scalar max{0};  ///< rad, the most downward pitch
 };
 
+/// Parameters of the area of interest adapted to velocity (paper 002 §3.3).
 template <std::floating_point Scalar = double>
 struct AreaOfInterestParams {
   /// The virtual corridor: the robot's height band (m above the floor).
   Scalar corridor_z_min{0.0};
-  Scalar corridor_z_max{1.0};
+  Scalar corridor_z_max{1.0};  ///< upper bound of the virtual corridor (m)
   /// d_min (m, horizontally from the scanner): from here on one pitch movement covers the whole
   /// corridor (§3.3: small in cluttered rooms, 1 m is ample along an empty corridor).
   Scalar d_min{1.0};
   /// The scanner's full vertical aperture Θ_pitch = 120 deg, as pitch limits.
   Scalar pitch_up_limit{-std::numbers::pi_v<Scalar> / 3};
-  Scalar pitch_down_limit{std::numbers::pi_v<Scalar> / 3};
+  Scalar pitch_down_limit{std::numbers::pi_v<Scalar> / 3};  ///< the aperture's downward limit (rad)
   /// Speed (m/s) from which only the virtual corridor is scanned; below it the AOI widens
   /// linearly towards the full aperture at standstill.
   Scalar fast_speed{0.5};
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where = "AreaOfInterestParams") const {
     detail::require_finite(where, "corridor_z_min", corridor_z_min);
     detail::require_finite(where, "corridor_z_max", corridor_z_max);
@@ -173,6 +175,8 @@ Point<3, Scalar> to_frame(const Pose2<Scalar>& pose, const Point<3, Scalar>& p) 
 template <std::floating_point Scalar = double>
 class PitchingObstacleExtractor {
  public:
+  /// An extractor for a scanner whose pitch axis sits at `sensor_offset` on the robot (t_s of
+  /// Eq. 3), with these floor-classification parameters; throws invalid_argument for invalid ones.
   explicit PitchingObstacleExtractor(const Point<3, Scalar>& sensor_offset,
                                      const FloorClassifierParams<Scalar>& floor = {})
       : sensor_offset_(sensor_offset), floor_(floor) {
@@ -184,6 +188,7 @@ class PitchingObstacleExtractor {
 
   /// Scans between a scan's arrival and the output of its obstacles.
   [[nodiscard]] std::size_t delay() const { return floor_.window_steps; }
+  /// The floor-classification parameters.
   [[nodiscard]] const FloorClassifierParams<Scalar>& floor_params() const { return floor_; }
 
   /// Forgets the stream (e.g. after a jump of the odometry).
@@ -255,7 +260,8 @@ class PitchingObstacleExtractor {
 /// at the base pose P_b (the pose of the sweep's first scan).
 template <std::floating_point Scalar = double>
 struct Sweep {
-  Pose2<Scalar> base_pose{};
+  Pose2<Scalar> base_pose{};  ///< the robot's odometry pose at the sweep's first scan
+  /// the sweep's readings in the base frame, one row per scan (organised)
   Cloud<3, Scalar> cloud{};
   std::vector<Scalar> pitches;       ///< pitch of each row
   std::vector<Pose2<Scalar>> poses;  ///< odometry pose of each row
@@ -264,9 +270,11 @@ struct Sweep {
   std::vector<Point<3, Scalar>> origins;
   bool starts_after_interruption{false};  ///< began mid-movement after a fast turn
 
+  /// Number of scans (rows) in the sweep.
   [[nodiscard]] std::size_t scan_count() const { return pitches.size(); }
 };
 
+/// Parameters of SweepAssembler.
 template <std::floating_point Scalar = double>
 struct SweepParams {
   /// t_s of Eq. (3).
@@ -283,6 +291,7 @@ struct SweepParams {
 template <std::floating_point Scalar = double>
 class SweepAssembler {
  public:
+  /// An assembler with these parameters; throws invalid_argument for invalid ones.
   explicit SweepAssembler(const SweepParams<Scalar>& params = {}) : params_(params) {
     detail::require_positive("SweepAssembler", "max_turn_rate", params_.max_turn_rate);
     if (!params_.sensor_offset.allFinite())

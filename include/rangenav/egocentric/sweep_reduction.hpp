@@ -94,23 +94,27 @@ std::size_t reduce_to_cluster_centroids(std::span<const Point<D, Scalar>> points
 /// projection of its first point (a) to that of its last point (b).
 template <int D, std::floating_point Scalar = double>
 struct LineSegment {
-  Point<D, Scalar> a{Point<D, Scalar>::Zero()};
-  Point<D, Scalar> b{Point<D, Scalar>::Zero()};
-  Point<D, Scalar> centroid{Point<D, Scalar>::Zero()};
+  Point<D, Scalar> a{
+      Point<D, Scalar>::Zero()};  ///< the projection of the first point onto the line
+  Point<D, Scalar> b{Point<D, Scalar>::Zero()};  ///< the projection of the last point onto the line
+  Point<D, Scalar> centroid{Point<D, Scalar>::Zero()};   ///< the mean of its points
   Point<D, Scalar> direction{Point<D, Scalar>::Zero()};  ///< unit, from a to b
   Scalar rms{0};  ///< root-mean-square orthogonal distance of its points (m)
   /// Its points are first, ..., first + count - 1 of the input (SweepReducer: the first beam
   /// of its scan and the number of readings behind it).
   std::size_t first{0};
-  std::size_t count{0};
+  std::size_t count{0};     ///< number of points
   std::size_t row{0};       ///< the scan it came from (SweepReducer)
   std::size_t plane{npos};  ///< the plane it was merged into (SweepReducer), or npos
   bool floor{false};        ///< most of its points are floor (SweepReducer)
 
+  /// "No plane".
   static constexpr std::size_t npos = static_cast<std::size_t>(-1);
+  /// |b - a| (m).
   [[nodiscard]] Scalar length() const { return (b - a).norm(); }
 };
 
+/// Parameters of the line-segment detection (Surmann et al. 2003, paper 002 §6.1 step 2).
 template <std::floating_point Scalar = double>
 struct LineDetectionParams {
   /// m; consecutive points farther apart end a line.
@@ -122,8 +126,9 @@ struct LineDetectionParams {
   Scalar max_distance{Scalar(0.015)};
   /// Shorter pieces are no lines.
   std::size_t min_points{5};
-  Scalar min_length{Scalar(0.1)};
+  Scalar min_length{Scalar(0.1)};  ///< m; shorter lines are dropped
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where = "LineDetectionParams") const {
     detail::require_positive(where, "max_gap", max_gap);
     detail::require_finite(where, "min_ratio", min_ratio);
@@ -297,21 +302,25 @@ std::size_t detect_line_segments(std::span<const Point<D, Scalar>> points,
 /// fitted by total least squares to the lines' endpoints (weighted by their point counts).
 template <std::floating_point Scalar = double>
 struct PlaneSegment {
-  Point<3, Scalar> normal{0, 0, 1};
-  Scalar distance{0};
+  Point<3, Scalar> normal{0, 0, 1};  ///< unit normal n
+  Scalar distance{0};                ///< n . p = distance on the plane (m)
+  /// the weighted mean of the lines' endpoints
   Point<3, Scalar> centroid{Point<3, Scalar>::Zero()};
   Scalar rms{0};  ///< root-mean-square distance of the lines' endpoints from the plane (m)
-  std::size_t line_count{0};
-  std::size_t scan_count{0};  ///< scans contributing lines
-  std::size_t point_count{0};
-  std::size_t first_row{0}, last_row{0};
-  bool floor{false};  ///< most of its lines are floor lines
+  std::size_t line_count{0};   ///< lines merged into the plane
+  std::size_t scan_count{0};   ///< scans contributing lines
+  std::size_t point_count{0};  ///< readings behind those lines
+  std::size_t first_row{0};    ///< the first scan contributing lines
+  std::size_t last_row{0};     ///< the last scan contributing lines
+  bool floor{false};           ///< most of its lines are floor lines
 
+  /// n . p - distance: positive on the side the normal points to (m).
   [[nodiscard]] Scalar signed_distance(const Point<3, Scalar>& p) const {
     return normal.dot(p) - distance;
   }
 };
 
+/// Parameters of merging the lines of consecutive scans into planes (paper 002 §6.1 step 3).
 template <std::floating_point Scalar = double>
 struct PlaneMergeParams {
   /// m; a line joins a plane only if both its endpoints lie this close to the fitted plane (or,
@@ -328,6 +337,7 @@ struct PlaneMergeParams {
   /// measurement plane, and lines of two neighbouring scans leave the tilt poorly determined).
   std::size_t min_scans{3};
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where = "PlaneMergeParams") const {
     detail::require_positive(where, "max_distance", max_distance);
     detail::require_positive(where, "max_line_distance", max_line_distance);
@@ -341,14 +351,16 @@ struct PlaneMergeParams {
 
 // ---- the four steps on a sweep ---------------------------------------------------------------
 
+/// Parameters of the four per-scan steps of paper 002 §6.1 on a sweep.
 template <std::floating_point Scalar = double>
 struct SweepReductionParams {
   /// Step 1: m, the largest distance between two points of one cluster.
   Scalar cluster_distance{Scalar(0.05)};
-  LineDetectionParams<Scalar> lines{};
-  PlaneMergeParams<Scalar> planes{};
-  FloorClassifierParams<Scalar> floor{};
+  LineDetectionParams<Scalar> lines{};    ///< step 2: line segments
+  PlaneMergeParams<Scalar> planes{};      ///< step 3: planes
+  FloorClassifierParams<Scalar> floor{};  ///< step 4: floor classification
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where = "SweepReductionParams") const {
     detail::require_positive(where, "cluster_distance", cluster_distance);
     lines.validate(where);
@@ -382,12 +394,15 @@ struct SweepReduction {
 template <std::floating_point Scalar = double>
 class SweepReducer {
  public:
+  /// A 3D point.
   using Vec3 = Point<3, Scalar>;
 
+  /// A reducer with these parameters; throws invalid_argument for invalid ones.
   explicit SweepReducer(const SweepReductionParams<Scalar>& params = {}) : params_(params) {
     params_.validate("SweepReducer");
   }
 
+  /// The parameters.
   [[nodiscard]] const SweepReductionParams<Scalar>& params() const { return params_; }
 
   /// Reduces one sweep into `out` (its vectors are cleared and reused).

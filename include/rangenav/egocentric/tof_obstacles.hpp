@@ -33,6 +33,7 @@
 
 namespace rangenav {
 
+/// Parameters of the height-image obstacle detection (Eq. 15 of paper 002) and its virtual scan.
 template <std::floating_point Scalar = double>
 struct HeightImageParams {
   /// ε_H of Eq. (15), m: the smallest obstacle height; not below the sensor's height noise.
@@ -44,12 +45,13 @@ struct HeightImageParams {
   std::size_t window_steps{8};
   /// The virtual corridor [z_min, z_max] (m): obstacle points outside it are ignored.
   Scalar z_min{0.0};
-  Scalar z_max{1.0};
+  Scalar z_max{1.0};  ///< upper bound of the virtual corridor (m)
   /// Points lower than -below_floor become artificial obstacles on the floor plane (§4.2).
   Scalar below_floor{0.05};
   /// The sensor's maximum range (m): the reading of a column without obstacles.
   Scalar max_range{5.0};
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where = "HeightImageParams") const {
     detail::require_positive(where, "epsilon_h", epsilon_h);
     detail::require_non_negative(where, "window_radius", window_radius);
@@ -68,11 +70,13 @@ struct HeightImageParams {
 template <std::floating_point Scalar = double>
 class HeightImageObstacleDetector {
  public:
+  /// A detector with these parameters; throws invalid_argument for invalid ones.
   explicit HeightImageObstacleDetector(const HeightImageParams<Scalar>& params = {})
       : params_(params) {
     params_.validate("HeightImageObstacleDetector");
   }
 
+  /// The parameters.
   [[nodiscard]] const HeightImageParams<Scalar>& params() const { return params_; }
 
   /// Detects the obstacles of one depth image; `extrinsics` maps the camera body frame (x along
@@ -133,6 +137,7 @@ class HeightImageObstacleDetector {
   }
   /// The ranges of virtual_scan() without building a LaserScan.
   [[nodiscard]] const std::vector<Scalar>& virtual_scan_ranges() const { return scan_ranges_; }
+  /// The beam layout of virtual_scan().
   [[nodiscard]] const ScanGeometry<Scalar>& virtual_scan_geometry() const { return scan_geometry_; }
 
  private:

@@ -28,6 +28,8 @@
 #include <cstdint>
 #include <numbers>
 #include <span>
+#include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -82,7 +84,7 @@ template <std::floating_point S>
 /// recomputing them. The series is evaluated in Estrin's form, (1 - r^2/3) + r^4 (1/5 - r^2/7 +
 /// r^4/9), not Horner's: the bearing decides the bin and with it the memory the map update
 /// touches next, so the latency of this chain, not its instruction count, bounds how many points
-/// are in flight (Horner's five dependent multiply-adds cost 3-8 % of the update's time, A/B).
+/// are in flight (Horner's five dependent multiply-adds make the update 3-8 % slower).
 template <std::floating_point S>
 [[nodiscard]] inline S shifted_bearing(S qx, S qy, S q_range, S q_bearing, S tx, S ty) {
   const S den = q_range * q_range + qx * tx + qy * ty;
@@ -102,7 +104,7 @@ template <std::floating_point S>
 /// shifted_bearing() for the transformation of stored points by one pose shift, which is
 /// small against their distances (a robot moves millimetres between scans): for |r| <= 0.01 the
 /// series to r^5 is accurate to r^7 / 7 < 1.5e-15, two multiply-adds shorter (about 4 % of the
-/// update's time, A/B). The replacement does not use it: the readings of a scanner mounted off
+/// update's time). The replacement does not use it: the readings of a scanner mounted off
 /// the rotation centre put r on both sides of 0.01, and the branch would be mispredicted.
 template <std::floating_point S>
 [[nodiscard]] inline S shifted_bearing_small_shift(S qx, S qy, S q_range, S q_bearing, S tx, S ty) {
@@ -124,15 +126,17 @@ template <std::floating_point S>
 /// the number of transformations (pose shifts) it has seen since it was measured.
 template <std::floating_point Scalar = double>
 struct VirtualMapPoint {
-  Scalar x{0};        ///< m, robot frame
-  Scalar y{0};        ///< m, robot frame
-  Scalar z{0};        ///< m, height above the floor (2.5D)
-  Scalar range{0};    ///< m, sqrt(x^2 + y^2)
-  Scalar bearing{0};  ///< rad, atan2(y, x) in (-pi, pi]
-  std::uint32_t age{0};
-  bool dummy{true};  ///< an empty bin (range = the policy's dummy range)
+  Scalar x{0};           ///< m, robot frame
+  Scalar y{0};           ///< m, robot frame
+  Scalar z{0};           ///< m, height above the floor (2.5D)
+  Scalar range{0};       ///< m, sqrt(x^2 + y^2)
+  Scalar bearing{0};     ///< rad, atan2(y, x) in (-pi, pi]
+  std::uint32_t age{0};  ///< transformations (pose shifts) since it was measured
+  bool dummy{true};      ///< an empty bin (range = the policy's dummy range)
 
+  /// The point (x, y).
   [[nodiscard]] Point<2, Scalar> xy() const { return {x, y}; }
+  /// The point (x, y, z).
   [[nodiscard]] Point<3, Scalar> xyz() const { return {x, y, z}; }
 };
 
@@ -177,18 +181,22 @@ struct ObstacleMapPolicy {
   /// m; about 6 sigma of the SICK LMS 2xx range noise (5 mm). 0: nothing refreshes.
   double refresh_tolerance{0.03};
 
+  /// Readings inside the virtual corridor and below the maximum range.
   template <std::floating_point S>
   [[nodiscard]] bool admits(S range, S z, S max_range) const {
     return range < max_range && z >= static_cast<S>(z_min) && z <= static_cast<S>(z_max);
   }
+  /// The nearer (or equally near) reading replaces the kept one.
   template <std::floating_point S>
   [[nodiscard]] bool prefers(S candidate, S kept) const {
     return candidate <= kept;
   }
+  /// A reading at most refresh_tolerance behind the kept one is the same surface seen again.
   template <std::floating_point S>
   [[nodiscard]] bool refreshes(S candidate, S kept) const {
     return candidate <= kept + static_cast<S>(refresh_tolerance);
   }
+  /// Empty bins read the maximum range.
   template <std::floating_point S>
   [[nodiscard]] S dummy_range(S max_range) const {
     return max_range;
@@ -203,18 +211,22 @@ struct StructureMapPolicy {
   /// m; 0: nothing refreshes.
   double refresh_tolerance{0.03};
 
+  /// Readings below the maximum range, at any height.
   template <std::floating_point S>
   [[nodiscard]] bool admits(S range, S /*z*/, S max_range) const {
     return range < max_range;
   }
+  /// The farther (or equally far) reading replaces the kept one.
   template <std::floating_point S>
   [[nodiscard]] bool prefers(S candidate, S kept) const {
     return candidate >= kept;
   }
+  /// A reading at most refresh_tolerance nearer than the kept one is the same surface seen again.
   template <std::floating_point S>
   [[nodiscard]] bool refreshes(S candidate, S kept) const {
     return candidate >= kept - static_cast<S>(refresh_tolerance);
   }
+  /// Empty bins read 0.
   template <std::floating_point S>
   [[nodiscard]] S dummy_range(S /*max_range*/) const {
     return S(0);
@@ -227,6 +239,9 @@ static_assert(VirtualMapPolicy<StructureMapPolicy, float>);
 /// Layout and ageing of a virtual map.
 template <std::floating_point Scalar = double>
 struct VirtualMapParams {
+  /// The most bins a map may have (2^20: 1.2 arcseconds over a full turn).
+  static constexpr std::size_t max_bins = std::size_t{1} << 20;
+
   /// Θ, rad, in (0, 2 pi]; the bins span [-Θ/2, Θ/2) around the robot's heading.
   Scalar aperture{2 * std::numbers::pi_v<Scalar>};
   /// Δθ, rad; N = round(Θ / Δθ) bins, each Θ / N wide (0.5 deg: 720 bins over 360 deg).
@@ -246,6 +261,7 @@ struct VirtualMapParams {
   /// rule.
   Scalar blind_range{0};
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where = "VirtualMapParams") const {
     detail::require_positive(where, "aperture", aperture);
     if (aperture > 2 * std::numbers::pi_v<Scalar> * (1 + 1e-9))
@@ -255,6 +271,12 @@ struct VirtualMapParams {
       detail::throw_invalid_argument(
           where, "resolution", resolution,
           "must not exceed the aperture " + detail::format_value(aperture));
+    // Checked before the bin count is rounded and allocated: 1e-9 rad would ask for 6e9 bins.
+    if (!(aperture / resolution <= static_cast<Scalar>(max_bins)))
+      detail::throw_invalid_argument(where, "resolution", resolution,
+                                     "gives more than " + std::to_string(max_bins) +
+                                         " bins over the aperture " +
+                                         detail::format_value(aperture));
     detail::require_positive(where, "max_range", max_range);
     detail::require_non_negative(where, "blind_range", blind_range);
   }
@@ -264,8 +286,8 @@ struct VirtualMapParams {
 /// measurement plane above the floor.
 template <std::floating_point Scalar = double>
 struct PlanarMount {
-  Pose2<Scalar> pose{};
-  Scalar height{0};
+  Pose2<Scalar> pose{};  ///< the sensor's pose in the robot frame
+  Scalar height{0};      ///< m, the measurement plane's height above the floor
 };
 
 /// What one call of the update procedure did.
@@ -276,19 +298,27 @@ struct VirtualMapUpdateStats {
   std::size_t replaced{0};  ///< bins written by new readings (step 3)
 };
 
+/// An egocentric virtual 2D map (paper 002 §4): one point per bearing bin around the robot,
+/// kept by the Policy, moved with the robot and aged (see the file comment and docs/egocentric.md).
 template <class Policy, std::floating_point Scalar = double>
 requires VirtualMapPolicy<Policy, Scalar>
 class VirtualMap {
  public:
+  /// The coordinate type.
   using scalar_type = Scalar;
+  /// A map point, Point<2, Scalar>.
   using point_type = Point<2, Scalar>;
+  /// A bin's content.
   using bin_type = VirtualMapPoint<Scalar>;
+  /// The policy.
   using policy_type = Policy;
 
   /// The policy's parameters may be changed between updates (e.g. the virtual corridor adapted to
   /// the robot's velocity).
   Policy policy{};
 
+  /// A map with this layout and policy, every bin a dummy; throws invalid_argument for an
+  /// invalid layout.
   explicit VirtualMap(const VirtualMapParams<Scalar>& params = {}, Policy map_policy = {})
       : policy(std::move(map_policy)), params_(params) {
     params_.validate("VirtualMap");
@@ -306,13 +336,17 @@ class VirtualMap {
     clear();
   }
 
+  /// The layout and ageing parameters.
   [[nodiscard]] const VirtualMapParams<Scalar>& params() const { return params_; }
   /// N, the number of bins.
   [[nodiscard]] std::size_t size() const { return bin_count_; }
   /// Θ / N, the width of a bin (rad).
   [[nodiscard]] Scalar resolution() const { return resolution_; }
+  /// The first bin's lower bearing (rad).
   [[nodiscard]] Scalar angle_min() const { return angle_min_; }
+  /// Readings at or beyond are ignored (m).
   [[nodiscard]] Scalar max_range() const { return params_.max_range; }
+  /// Transformations after which a point ages out.
   [[nodiscard]] std::uint32_t max_age() const { return params_.max_age; }
   /// The dummy range of this map's policy.
   [[nodiscard]] Scalar dummy_range() const { return policy.dummy_range(params_.max_range); }
@@ -320,7 +354,9 @@ class VirtualMap {
   /// Changes the age threshold of §4.4.2 (takes effect at the next transformation).
   void set_max_age(std::uint32_t max_age) { params_.max_age = max_age; }
 
+  /// Every bin, in bearing order.
   [[nodiscard]] std::span<const bin_type> bins() const { return {bins_.data(), bin_count_}; }
+  /// Bin i.
   [[nodiscard]] const bin_type& bin(std::size_t i) const { return bins_[i]; }
   /// Bearing of the centre of bin i.
   [[nodiscard]] Scalar bin_bearing(std::size_t i) const {
@@ -336,6 +372,7 @@ class VirtualMap {
   [[nodiscard]] const std::vector<point_type>& valid_points() const { return valid_points_; }
   /// Bins holding a non-dummy point, increasing.
   [[nodiscard]] const std::vector<std::uint32_t>& valid_indices() const { return valid_indices_; }
+  /// Number of non-dummy bins.
   [[nodiscard]] std::size_t valid_count() const { return valid_indices_.size(); }
 
   /// Fills every bin with a dummy point.
@@ -355,7 +392,9 @@ class VirtualMap {
   /// Eq. (4) with Δθ = -motion.theta and (Δx, Δy) = -R(Δθ) (motion.x, motion.y). Points whose
   /// count of transformations exceeds max_age become dummies. Nothing happens when the motion is
   /// exactly zero (the robot did not move).
+  /// Throws invalid_argument for a non-finite motion (it would turn every point into NaN).
   VirtualMapUpdateStats transform(const Pose2<Scalar>& motion) {
+    require_finite_motion(motion, "VirtualMap::transform");
     VirtualMapUpdateStats stats = transform_bins(motion);
     refresh();
     return stats;
@@ -372,23 +411,30 @@ class VirtualMap {
   }
 
   /// Step 3 of §4.4 for a 2D scan from a planar sensor mounted at `mount` (its valid readings
-  /// only; the scan's range_max and the map's max_range both limit them).
+  /// only; the scan's range_max and the map's max_range both limit them). Throws
+  /// invalid_argument for a non-finite mounting.
   std::size_t insert(const LaserScan<Scalar>& scan, const PlanarMount<Scalar>& mount = {}) {
+    require_finite_mount(mount, "VirtualMap::insert");
     const std::size_t written = insert_bins(scan, mount);
     refresh();
     return written;
   }
 
   /// The whole procedure of §4.4: transform by `motion` (skipped when zero), age out, insert.
+  /// Throws invalid_argument as transform() and insert() do.
   template <class Readings>
   VirtualMapUpdateStats update(const Pose2<Scalar>& motion, const Readings& readings) {
+    require_finite_motion(motion, "VirtualMap::update");
     VirtualMapUpdateStats stats = transform_bins(motion);
     stats.replaced = insert_bins(readings);
     refresh();
     return stats;
   }
+  /// As update(motion, readings) for a planar scan from a sensor mounted at `mount`.
   VirtualMapUpdateStats update(const Pose2<Scalar>& motion, const LaserScan<Scalar>& scan,
                                const PlanarMount<Scalar>& mount) {
+    require_finite_motion(motion, "VirtualMap::update");
+    require_finite_mount(mount, "VirtualMap::update");
     VirtualMapUpdateStats stats = transform_bins(motion);
     stats.replaced = insert_bins(scan, mount);
     refresh();
@@ -408,6 +454,18 @@ class VirtualMap {
   }
 
  private:
+  static void require_finite_motion(const Pose2<Scalar>& motion, std::string_view where) {
+    detail::require_finite(where, "motion.x", motion.x);
+    detail::require_finite(where, "motion.y", motion.y);
+    detail::require_finite(where, "motion.theta", motion.theta);
+  }
+  static void require_finite_mount(const PlanarMount<Scalar>& mount, std::string_view where) {
+    detail::require_finite(where, "mount.pose.x", mount.pose.x);
+    detail::require_finite(where, "mount.pose.y", mount.pose.y);
+    detail::require_finite(where, "mount.pose.theta", mount.pose.theta);
+    detail::require_finite(where, "mount.height", mount.height);
+  }
+
   VirtualMapUpdateStats transform_bins(const Pose2<Scalar>& motion) {
     VirtualMapUpdateStats stats;
     if (motion.x == Scalar(0) && motion.y == Scalar(0) && motion.theta == Scalar(0)) return stats;
@@ -482,7 +540,7 @@ class VirtualMap {
   /// place() selects its store address from the loaded bin (no branch to mispredict); fused with
   /// the bearing computation, that made each beam's bin load wait for the previous beam's long
   /// chain (Eq. 4, a division, the bearing series, the bin index); staged, the chains of all
-  /// beams overlap and the second pass only loads, compares and stores (6 % faster, A/B).
+  /// beams overlap and the second pass only loads, compares and stores (about 6 % faster).
   std::size_t insert_bins(const LaserScan<Scalar>& scan, const PlanarMount<Scalar>& mount = {}) {
     const Pose2<Scalar>& m = mount.pose;
     const Scalar c = std::cos(m.theta), s = std::sin(m.theta);
@@ -605,9 +663,10 @@ class VirtualMap {
   std::vector<std::uint32_t> valid_indices_;
 };
 
-/// The two map types of §4.
+/// The obstacle map of §4.2 (the nearest reading per bearing in the robot's height band).
 template <std::floating_point Scalar = double>
 using ObstacleMap = VirtualMap<ObstacleMapPolicy, Scalar>;
+/// The structure map of §4.3 (the farthest reading per bearing).
 template <std::floating_point Scalar = double>
 using StructureMap = VirtualMap<StructureMapPolicy, Scalar>;
 
@@ -615,9 +674,13 @@ namespace traits {
 /// A virtual map is a 2D PointCloud of its non-dummy points.
 template <class P, class S>
 struct cloud_access<VirtualMap<P, S>> {
+  /// A virtual map is two-dimensional.
   static constexpr int dimension = 2;
+  /// The coordinate type.
   using Scalar = S;
+  /// Number of non-dummy points.
   static std::size_t size(const VirtualMap<P, S>& m) { return m.valid_count(); }
+  /// The i-th non-dummy point (robot frame).
   static const Point<2, S>& point(const VirtualMap<P, S>& m, std::size_t i) {
     return m.valid_points()[i];
   }

@@ -68,16 +68,14 @@
 // may be boundary cells (their sites can be anywhere in them) breaks the first step: removing
 // every odd cell whose 3 x 3 block is occupied made that test fail. On the benchmark frame this
 // rule keeps 416 sites fewer than requiring the 5 x 5 block of every removed cell.
-// Sparser interiors that the same argument allows were measured (session 8) and not kept: the
-// proof only needs every point near a removed centre within some rho < alpha of a site, so a
-// deep region may use the lattice spanned by (3, 0) and (1, 3) cells (acute Delaunay triangles,
-// circumradius 1.90 c < 2 c; 1 site per 9 cells instead of 4) where every lattice cell within
-// 3.8 c is interior; but the planes of the benchmark's two key frames are too small for deep
-// regions (their 30 hulls' 16,453 interior cells: 10,442 sites removed against 10,366, for
-// 4.4 M instructions of bookkeeping). Letting an odd cell lean on one axis neighbour or two
+// Sparser interiors are allowed by the same argument but not used: the proof only needs every
+// point near a removed centre within some rho < alpha of a site, so a deep region could use the
+// lattice spanned by (3, 0) and (1, 3) cells (acute Delaunay triangles, circumradius 1.90 c <
+// 2 c; 1 site per 9 cells instead of 4) where every lattice cell within 3.8 c is interior; but
+// typical planes of a depth frame are too small for deep regions, and the bookkeeping costs
+// more than the sites it removes. Letting an odd cell lean on one axis neighbour or two
 // diagonals (every point within 1.80 c of a site) needs its 5 x 5 block (less the corners)
-// occupied: alone it removed fewer sites (9,833) than the rule above, added to it (where no cell of
-// the 3 x 3 block was removed by the rule above, which the rule above's proof needs) none.
+// occupied, and removes fewer sites than the rule above.
 
 #include <boost/geometry/algorithms/within.hpp>
 #include <boost/geometry/geometries/point_xy.hpp>
@@ -107,6 +105,7 @@
 
 namespace rangenav {
 
+/// Parameters of the alpha-shape hull (see the file comment).
 struct ConcaveHullParams {
   /// Largest circumradius (m) of a Delaunay triangle that belongs to the shape. A few times the
   /// point spacing: larger values close gaps and bays, smaller ones split the shape.
@@ -128,6 +127,8 @@ struct ConcaveHullParams {
   /// moves outwards to that chord (see the file comment).
   bool all_corners = false;
 
+  /// Throws invalid_argument for a non-positive alpha or resolution, a negative min_area or a
+  /// thinning outside [0, 0.5]; `where` names the caller.
   void validate(std::string_view where) const {
     detail::require_positive(where, "params.alpha", alpha);
     detail::require_positive(where, "params.resolution", resolution);
@@ -140,12 +141,15 @@ struct ConcaveHullParams {
 /// Builds alpha-shape hulls; owns its scratch buffers, so repeated calls allocate little.
 class ConcaveHull {
  public:
+  /// An integer grid cell.
   using cell_type = IntegerGrid::cell_type;
 
+  /// A hull builder with these parameters; throws invalid_argument for invalid ones.
   explicit ConcaveHull(const ConcaveHullParams& params = {}) : params_(params) {
     params_.validate("ConcaveHull");
   }
 
+  /// The parameters.
   [[nodiscard]] const ConcaveHullParams& params() const { return params_; }
 
   /// Reserves the per-point scratch for inputs of up to `points` points and touches it, so that

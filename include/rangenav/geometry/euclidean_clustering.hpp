@@ -39,11 +39,14 @@
 
 namespace rangenav {
 
+/// Parameters of Euclidean clustering (Eq. 1 of paper 001, the clustering of paper 004 §3.2).
 struct EuclideanClusteringParams {
-  double tolerance = 0.02;  ///< m, largest gap inside a cluster
-  std::size_t min_cluster_size = 1;
+  double tolerance = 0.02;           ///< m, largest gap inside a cluster
+  std::size_t min_cluster_size = 1;  ///< smaller clusters are dropped
+  /// larger clusters are dropped
   std::size_t max_cluster_size = std::numeric_limits<std::size_t>::max();
 
+  /// Throws invalid_argument for a non-positive tolerance or min_cluster_size > max_cluster_size.
   void validate(std::string_view where) const {
     detail::require_positive(where, "params.tolerance", tolerance);
     if (max_cluster_size < min_cluster_size)

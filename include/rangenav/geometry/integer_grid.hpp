@@ -17,7 +17,7 @@ namespace rangenav {
 
 /// A square grid of `resolution` metres whose cells are addressed by 32-bit integers.
 struct IntegerGrid {
-  using cell_type = std::array<std::int32_t, 2>;
+  using cell_type = std::array<std::int32_t, 2>;  ///< a cell: (x, y) in grid steps
 
   double resolution = 0.001;  ///< m per grid step
 

@@ -18,8 +18,8 @@ namespace rangenav {
 /// The plane n . x + d = 0 with a unit normal n (Eq. 4-5 of paper 004, normalised).
 template <class Scalar = double>
 struct Plane3 {
-  Point<3, Scalar> normal{0, 0, 1};
-  Scalar d{0};
+  Point<3, Scalar> normal{0, 0, 1};  ///< unit normal n
+  Scalar d{0};                       ///< offset: n . x + d = 0 on the plane
 
   /// The plane a x + b y + c z + d = 0, normalised so that |(a, b, c)| = 1. Throws
   /// invalid_argument when a coefficient is not finite or (a, b, c) is (near) zero.
@@ -61,8 +61,8 @@ struct Plane3 {
 /// open (the first vertex is not repeated at the end).
 template <class Scalar = double>
 struct Polygon2 {
-  std::vector<Point<2, Scalar>> outer;
-  std::vector<std::vector<Point<2, Scalar>>> holes;
+  std::vector<Point<2, Scalar>> outer;               ///< outer ring, counter-clockwise, open
+  std::vector<std::vector<Point<2, Scalar>>> holes;  ///< holes, each clockwise, open
 
   /// Area enclosed by `outer` minus the holes (shoelace formula on each ring).
   [[nodiscard]] Scalar area() const {
@@ -89,6 +89,7 @@ struct Polygon2 {
 /// coordinate of a mapped point is its signed distance to the plane.
 template <class Scalar = double>
 struct PlaneFrame {
+  /// maps world points into the frame
   Transform<3, Scalar> world_to_plane = Transform<3, Scalar>::Identity();
 
   /// The frame of `plane`. Its x axis is the world axis least aligned with the normal, made
@@ -129,9 +130,9 @@ struct PlaneFrame {
 /// (e.g. the concave hull of a plane's inliers).
 template <class Scalar = double>
 struct PlanarPolygon {
-  Plane3<Scalar> plane;
-  PlaneFrame<Scalar> frame;
-  Polygon2<Scalar> polygon;
+  Plane3<Scalar> plane;      ///< the plane the polygon lies on
+  PlaneFrame<Scalar> frame;  ///< the frame the polygon's coordinates are given in
+  Polygon2<Scalar> polygon;  ///< the outline, in the frame's x-y coordinates
 
   /// The outer ring's vertices in world coordinates.
   [[nodiscard]] std::vector<Point<3, Scalar>> outer_world() const {

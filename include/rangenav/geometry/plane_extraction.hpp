@@ -53,6 +53,7 @@
 
 namespace rangenav {
 
+/// Parameters of iterative RANSAC plane extraction (paper 004 §3.2-3.3).
 struct PlaneExtractionParams {
   /// RANSAC inlier band: |delta| of Eq. (2) below this (m).
   double distance_threshold = 0.02;
@@ -92,6 +93,7 @@ struct PlaneExtractionParams {
   /// camera is thinned in cells of half alpha (ConcaveHullParams::thinning).
   ConcaveHullParams hull{.thinning = 0.5};
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     detail::require_positive(where, "params.distance_threshold", distance_threshold);
     if (min_inliers < 3)
@@ -123,12 +125,14 @@ struct ExtractedPlane {
 /// Iterative RANSAC plane extraction; owns scratch buffers reused across calls.
 class PlaneExtractor {
  public:
+  /// An extractor with these parameters; throws invalid_argument for invalid ones.
   explicit PlaneExtractor(const PlaneExtractionParams& params = {})
       : params_(params), hull_(params.hull) {
     params_.validate("PlaneExtractor");
     if (params_.axis) params_.axis->normalize();
   }
 
+  /// The parameters (the orientation axis normalised).
   [[nodiscard]] const PlaneExtractionParams& params() const { return params_; }
 
   /// Sets (or clears) the point normals are turned to face, e.g. the sensor of the next frame.
@@ -497,8 +501,8 @@ class PlaneExtractor {
     const std::size_t n = remaining_.size();
     // others_ is sized in round 1 too, as when round 1 moved points: allocated after round 1's
     // buffers instead, it made glibc give the heap back to the system after every key frame of
-    // the benchmark's fresh mapper per frame and fault it in again (perf stat -e page-faults over
-    // a BM_keyframe_total run: 19k -> 103k, about +3 ms per key frame).
+    // a fresh mapper and fault it in again (five times the page faults, about +3 ms per key
+    // frame).
     if (others_.size() < n) others_.resize(n);
     // Round 1 lists at most ceil(n / stride) positions: piece_ (which the hull shrinks to round
     // 2's count) grows to that only, not to n (its growth is a memset).
@@ -509,9 +513,8 @@ class PlaneExtractor {
     // (inliers with their plane coordinates). The points come in image order, so the test
     // changes only where the band enters or leaves a surface and the branch is mostly predicted;
     // the pass is bound by memory traffic, and the branch-free form (every point written to both
-    // sides and its plane coordinates computed for all) moved 88 instead of 40-48 bytes a point:
-    // the extraction 20.9 -> 19.9 ms (driver A/B, load 2.8). Writes to remaining_ never pass the
-    // read position.
+    // sides and its plane coordinates computed for all) moves 88 instead of 40-48 bytes a point
+    // and is about 5 % slower. Writes to remaining_ never pass the read position.
     Point3d* const in = remaining_.data();
     [[maybe_unused]] Point3d* const out = others_.data();
     Point2d* const proj = projected_.data();

@@ -8,6 +8,12 @@
 // Conventions shared by every backend:
 // - Input rings may have either orientation and must not repeat their first vertex; a hole must
 //   lie inside its outer ring. Each input polygon must be simple (no self-intersections).
+//   BoostGeometryClipper checks this with boost::geometry::is_valid and raises invalid_argument
+//   naming the defect (a self-crossing "bowtie", a hole outside its outer ring): an invalid
+//   polygon would otherwise give a wrong answer silently. Repeated vertices and rings that touch
+//   themselves are accepted (the overlay follows touching turns); spikes are removed; a polygon
+//   whose outer ring has no area is the empty set: it intersects nothing and adds nothing to a
+//   union (detail::prepare_overlay_input).
 // - `intersects(a, b)` is true when the interiors of a and b overlap, i.e. their intersection has
 //   a positive area. Polygons that only touch along an edge or at a point do not intersect: the
 //   paper computes the intersection and merges only when it is not empty.
@@ -42,10 +48,11 @@ concept PolygonClipper = requires(const C& clipper, const Polygon2<Scalar>& a,
   { clipper.union_of(a, b) } -> std::same_as<std::vector<Polygon2<Scalar>>>;
 };
 
-/// Boost.Geometry's point and polygon with Polygon2's conventions: outer ring counter-clockwise
-/// (ClockWise = false), open rings (Closed = false).
+/// Boost.Geometry's point with Polygon2's conventions.
 template <class Scalar = double>
 using BoostPoint2 = boost::geometry::model::d2::point_xy<Scalar>;
+/// Boost.Geometry's polygon with Polygon2's conventions: outer ring counter-clockwise
+/// (ClockWise = false), open rings (Closed = false).
 template <class Scalar = double>
 using BoostPolygon2 = boost::geometry::model::polygon<BoostPoint2<Scalar>, false, false>;
 
@@ -66,6 +73,106 @@ void require_valid_polygon(const char* where, const char* name, const Polygon2<S
   check_ring(polygon.outer, ".outer");
   for (const auto& h : polygon.holes)
     check_ring(h, ".holes[i]");
+}
+
+}  // namespace detail
+
+namespace detail {
+
+/// boost::geometry::is_valid's visitor for the clippers' inputs: records the first defect that
+/// makes an overlay's answer wrong. A ring that touches itself (a self-turn that does not cross)
+/// and the interior such touches split are accepted, since Boost.Geometry's overlay follows
+/// touching turns (concave hulls of real scans have them); crossings, rings without area, holes
+/// outside their ring or inside another hole are not. Repeated vertices are fine.
+struct OverlayValidity {
+  boost::geometry::validity_failure_type failure = boost::geometry::no_failure;
+
+  template <boost::geometry::validity_failure_type Failure>
+  bool apply() {
+    return accept(Failure);
+  }
+  template <boost::geometry::validity_failure_type Failure, class Turns>
+  bool apply(const Turns& turns) {
+    if constexpr (Failure == boost::geometry::failure_self_intersections) {
+      for (const auto& turn : turns)
+        if (turn.method == boost::geometry::detail::overlay::method_crosses) return accept(Failure);
+      return true;
+    } else {
+      return accept(Failure);
+    }
+  }
+  template <boost::geometry::validity_failure_type Failure, class A, class B>
+  bool apply(const A&, const B&) {
+    return accept(Failure);
+  }
+
+ private:
+  bool accept(boost::geometry::validity_failure_type f) {
+    namespace bg = boost::geometry;
+    if (f == bg::no_failure || f == bg::failure_duplicate_points ||
+        f == bg::failure_disconnected_interior)
+      return true;
+    failure = f;
+    return false;
+  }
+};
+
+/// The defect of an invalid input in words.
+inline std::string overlay_failure_text(boost::geometry::validity_failure_type failure) {
+  namespace bg = boost::geometry;
+  switch (failure) {
+    case bg::failure_few_points:
+      return "a ring has fewer than 3 distinct points";
+    case bg::failure_wrong_topological_dimension:
+    case bg::failure_spikes:
+      return "a ring has no area (its points are collinear)";
+    case bg::failure_self_intersections:
+      return "a ring crosses itself or another ring";
+    case bg::failure_wrong_orientation:  // after bg::correct: lobes whose areas cancel
+      return "a ring crosses itself (its orientation is undefined)";
+    case bg::failure_interior_rings_outside:
+      return "a hole lies outside its outer ring";
+    case bg::failure_nested_interior_rings:
+      return "a hole lies inside another hole";
+    default:
+      return "Boost.Geometry validity failure " + std::to_string(static_cast<int>(failure));
+  }
+}
+
+/// Makes `polygon` (orientation corrected) fit for an overlay and says whether it has area:
+/// false for a polygon whose outer ring encloses nothing (all its vertices on one line), which
+/// is the empty set; a hole without area is dropped. Throws invalid_argument naming `where`,
+/// `name` and the defect (OverlayValidity) for any other invalid polygon. Spikes, zero-width
+/// needles, are the one defect repaired, explicitly, by boost::geometry::remove_spikes, and the
+/// result checked again.
+template <class Scalar>
+[[nodiscard]] bool prepare_overlay_input(const char* where, const char* name,
+                                         BoostPolygon2<Scalar>& polygon) {
+  namespace bg = boost::geometry;
+  // No area: every vertex on one line (a ring whose lobes cancel, a bowtie, has vertices off it).
+  const auto no_area = [](const auto& ring) {
+    for (std::size_t i = 1; i < ring.size(); ++i) {
+      const Scalar ux = ring[i].x() - ring[0].x(), uy = ring[i].y() - ring[0].y();
+      if (ux == Scalar(0) && uy == Scalar(0)) continue;
+      for (std::size_t j = i + 1; j < ring.size(); ++j)
+        if (ux * (ring[j].y() - ring[0].y()) != uy * (ring[j].x() - ring[0].x())) return false;
+      return true;
+    }
+    return true;
+  };
+  auto& holes = polygon.inners();
+  holes.erase(std::remove_if(holes.begin(), holes.end(), no_area), holes.end());
+  if (no_area(polygon.outer())) return false;
+  OverlayValidity check;
+  if (bg::is_valid(polygon, check, bg::default_strategy())) return true;
+  if (check.failure == bg::failure_spikes) {
+    bg::remove_spikes(polygon);
+    if (no_area(polygon.outer())) return false;
+    check = {};
+    if (bg::is_valid(polygon, check, bg::default_strategy())) return true;
+  }
+  throw_invalid(where, std::string("argument '") + name +
+                           "' is not a valid polygon: " + overlay_failure_text(check.failure));
 }
 
 }  // namespace detail
@@ -169,14 +276,18 @@ template <class Scalar>
 /// Stateless and thread-safe.
 struct BoostGeometryClipper {
   /// True when the interiors of a and b overlap (positive intersection area). Throws
-  /// invalid_argument for a polygon with fewer than 3 vertices in a ring or a non-finite vertex.
+  /// invalid_argument for a ring with fewer than 3 vertices, a non-finite vertex, or a polygon
+  /// that is not valid (see the conventions at the top of the file).
   template <class Scalar>
   [[nodiscard]] bool intersects(const Polygon2<Scalar>& a, const Polygon2<Scalar>& b) const {
     constexpr const char* where = "BoostGeometryClipper::intersects";
     detail::require_valid_polygon(where, "a", a);
     detail::require_valid_polygon(where, "b", b);
-    const auto pa = to_boost_polygon(a);
-    const auto pb = to_boost_polygon(b);
+    auto pa = to_boost_polygon(a);
+    auto pb = to_boost_polygon(b);
+    const bool area_a = detail::prepare_overlay_input(where, "a", pa);
+    const bool area_b = detail::prepare_overlay_input(where, "b", pb);
+    if (!area_a || !area_b) return false;  // a polygon without area overlaps nothing
     try {
       return detail::boost_interiors_intersect(pa, pb);
     } catch (const std::exception& e) {
@@ -185,19 +296,24 @@ struct BoostGeometryClipper {
   }
 
   /// The union of a and b as a list of polygons with holes (see the file's conventions). Throws
-  /// invalid_argument like intersects() and when Boost.Geometry rejects the input (e.g. a
-  /// self-intersecting ring).
+  /// invalid_argument like intersects() and when Boost.Geometry rejects the input.
   template <class Scalar>
   [[nodiscard]] std::vector<Polygon2<Scalar>> union_of(const Polygon2<Scalar>& a,
                                                        const Polygon2<Scalar>& b) const {
     constexpr const char* where = "BoostGeometryClipper::union_of";
     detail::require_valid_polygon(where, "a", a);
     detail::require_valid_polygon(where, "b", b);
-    const auto pa = to_boost_polygon(a);
-    const auto pb = to_boost_polygon(b);
+    auto pa = to_boost_polygon(a);
+    auto pb = to_boost_polygon(b);
+    const bool area_a = detail::prepare_overlay_input(where, "a", pa);
+    const bool area_b = detail::prepare_overlay_input(where, "b", pb);
     boost::geometry::model::multi_polygon<BoostPolygon2<Scalar>> result;
     try {
-      detail::boost_union(pa, pb, result);
+      // A polygon without area adds nothing to the other (which the overlay lost before).
+      if (area_a && area_b)
+        detail::boost_union(pa, pb, result);
+      else if (area_a || area_b)
+        result.push_back(area_a ? pa : pb);
     } catch (const std::exception& e) {
       detail::throw_invalid(where, std::string("Boost.Geometry rejected the input: ") + e.what());
     }

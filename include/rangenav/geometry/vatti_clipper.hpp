@@ -39,13 +39,15 @@ namespace rangenav {
 /// Stateless apart from `scale`; calls on one object may run concurrently.
 class VattiClipper {
  public:
-  /// Integer grid steps per input unit (1e6: micrometres for metres). Throws invalid_argument
-  /// unless finite and > 0.
+  /// A clipper on a micrometre grid (scale 1e6).
   VattiClipper() = default;
+  /// A clipper with `scale` integer grid steps per input unit (1e6: micrometres for metres).
+  /// Throws invalid_argument unless finite and > 0.
   explicit VattiClipper(double scale) : scale_(scale) {
     detail::require_positive("VattiClipper", "scale", scale);
   }
 
+  /// Integer grid steps per input unit.
   [[nodiscard]] double scale() const { return scale_; }
 
   /// True when the intersection of a and b has a positive area on the integer grid. Two cheap

@@ -22,16 +22,43 @@
 //   1. CarmenReaderOptions::range_max when set;
 //   2. RAWLASER/ROBOTLASER: the record's max_range field;
 //      FLASER/RLASER: the last PARAM robot_front_laser_max / robot_rear_laser_max seen so far;
-//   3. 81.9 m, so the SICK "no return" reading 81.91 of the MIT and Freiburg logs is invalid.
-// Note: intel-corrected.log marks "no return" with 81.83; pass range_max = 81.0 to drop those.
+//   3. 81.9 m, so the SICK "no return" reading 81.91 of the MIT and Freiburg logs is invalid;
+// and, unless range_max is set or detect_saturation is off, lowered to the log's saturation
+// value when the reader recognises one (below).
 //
-// A malformed line (too few fields, a non-numeric field, a count that does not match) raises
-// io_error naming the file and the 1-based line, e.g.
+// Saturation. Logs encode "no return" as the scanner's largest reading, and which one differs:
+// 81.91 (MIT, Freiburg), 81.83 (Intel), 50.0, 51.2 or 32.767 m, mostly with no PARAM line that
+// says so. Taken as a reading it becomes a wall of phantom points at that range. The reader
+// recognises the value from the data of each laser (FLASER, RLASER, RAWLASERk, ROBOTLASER1 apart)
+// rather than from a list of known values: it is the largest reading of the log, and it recurs
+// exactly, on several beams of one scan, in scans taken from different poses. A real surface
+// does neither: the farthest beam of a scan is one beam (its neighbours see the surface at other
+// ranges), and its range changes when the robot moves. So a value is recognised once it has been
+// the largest reading so far and the reading of at least 2 beams of each of
+// `saturation_evidence` scans whose odometry poses (where the record has them) differ by more than
+// 5 cm or 0.05 rad; a larger reading later revokes it (readings at the value in earlier scans were
+// then dropped: the error is on the safe side, never a phantom wall). So that the value applies
+// to a log's first scans too, the reader reads the first `saturation_lookahead` laser records
+// before it returns any: their evidence decides for all of them. It holds their parsed fields
+// only, and a malformed line met while reading ahead is reported once the records before it
+// have been returned.
+//
+// Timestamps are read as they are: zero, negative, repeated or rounded timestamps are fine (some
+// logs carry such); only non-finite ones are malformed.
+//
+// A malformed line (too few fields, a non-numeric or non-finite pose, timestamp or configuration
+// field, a count that does not match) raises io_error naming the file and the 1-based line, e.g.
 //   rangenav: carmen: mit.clf:12: FLASER: expected 361 ranges, found 40
+// Ranges and remissions may be anything numeric: NaN, inf, 0 and out-of-range readings are invalid
+// beams of the scan, not errors.
 
+#include <array>
 #include <cmath>
 #include <cstddef>
+#include <deque>
+#include <exception>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <optional>
@@ -41,9 +68,11 @@
 #include <variant>
 #include <vector>
 
+#include "rangenav/core/angles.hpp"
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/io/line_reader.hpp"
+#include "rangenav/io/reader_limits.hpp"
 #include "rangenav/scan/laser_scan.hpp"
 
 namespace rangenav::io {
@@ -85,15 +114,25 @@ struct CarmenOdometry {
 
 using CarmenRecord = std::variant<CarmenLaser, CarmenOdometry>;
 
-/// How the reader builds scans; see the maximum-range precedence at the top of this file.
+/// How the reader builds scans; see the maximum-range precedence and the saturation rule at the
+/// top of this file.
 struct CarmenReaderOptions {
   /// Overrides every other source of the maximum range when set (m, > range_min).
   std::optional<double> range_max{};
   /// Readings below it are invalid beams (m, >= 0).
   double range_min = 0.0;
+  /// Recognise each laser's saturation ("no return") value and treat it as the maximum range.
+  bool detect_saturation = true;
+  /// Scans that must show a value before it is recognised as the saturation value (>= 1).
+  std::size_t saturation_evidence = 3;
+  /// Laser records read before the first is returned, whose evidence decides for all (0: none).
+  std::size_t saturation_lookahead = 1000;
+  /// Longest line; read_carmen_lasers() also returns at most limits.max_points records.
+  ReaderLimits limits{};
 };
 
-/// Streaming reader: holds one buffer of the file at a time, never the whole log.
+/// Streaming reader: holds one buffer of the file at a time and at most
+/// options.saturation_lookahead parsed records, never the whole log.
 class CarmenReader {
  public:
   /// The maximum range when neither the options nor the log say otherwise (m).
@@ -102,35 +141,89 @@ class CarmenReader {
   /// Opens the log. Throws invalid_argument for bad options (checked first) and io_error when
   /// the file cannot be opened (or is gzip-compressed and zlib is missing).
   explicit CarmenReader(const std::filesystem::path& path, CarmenReaderOptions options = {})
-      : options_(validated(options)), lines_(path, "carmen") {}
+      : options_(validated(options)), lines_(path, "carmen", options_.limits.max_line_bytes) {}
 
-  /// The next laser or odometry record, or nullopt at the end of the file.
+  /// The next laser or odometry record, or nullopt at the end of the file. Throws io_error for
+  /// a malformed line once every record before it has been returned.
   std::optional<CarmenRecord> next() {
-    std::string_view line;
-    while (lines_.next(line)) {
-      detail::split_whitespace(line, tokens_);
-      if (tokens_.empty() || tokens_[0].front() == '#') continue;
-      const std::string_view tag = tokens_[0];
-      if (tag == "FLASER") return CarmenRecord{parse_old_laser(CarmenLaserType::flaser)};
-      if (tag == "RLASER") return CarmenRecord{parse_old_laser(CarmenLaserType::rlaser)};
-      if (tag == "ODOM") return CarmenRecord{parse_odometry()};
-      if (tag == "ROBOTLASER1") return CarmenRecord{parse_new_laser(CarmenLaserType::robotlaser1)};
-      if (tag == "RAWLASER1") return CarmenRecord{parse_new_laser(CarmenLaserType::rawlaser1)};
-      if (tag == "RAWLASER2") return CarmenRecord{parse_new_laser(CarmenLaserType::rawlaser2)};
-      if (tag == "RAWLASER3") return CarmenRecord{parse_new_laser(CarmenLaserType::rawlaser3)};
-      if (tag == "RAWLASER4") return CarmenRecord{parse_new_laser(CarmenLaserType::rawlaser4)};
-      if (tag == "PARAM") parse_param();
+    while (!finished_ && (pending_.empty() || holding())) {
+      try {
+        if (!parse_next()) finished_ = true;
+      } catch (const error&) {
+        error_ = std::current_exception();
+        finished_ = true;
+      }
     }
-    return std::nullopt;
+    if (pending_.empty()) {
+      if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+      return std::nullopt;
+    }
+    return pop();
   }
 
-  /// The PARAM lines seen so far (name -> value).
+  /// The PARAM lines read so far (name -> value); the reader may have read up to
+  /// options.saturation_lookahead records beyond the last one it returned.
   [[nodiscard]] const std::map<std::string, std::string>& params() const { return params_; }
+
+  /// The saturation value recognised so far for a laser type, if any (m).
+  [[nodiscard]] std::optional<double> saturation(CarmenLaserType type) const {
+    const Saturation& s = saturation_[static_cast<std::size_t>(type)];
+    if (!options_.detect_saturation || !s.recognised(options_.saturation_evidence))
+      return std::nullopt;
+    return s.value;
+  }
 
   /// The path of the log.
   [[nodiscard]] const std::filesystem::path& path() const { return lines_.path(); }
 
  private:
+  static constexpr std::size_t laser_types = 7;
+
+  /// The evidence for one laser's saturation value (see the top of this file).
+  struct Saturation {
+    double value = -std::numeric_limits<double>::infinity();  ///< largest reading so far
+    std::size_t evidence = 0;  ///< scans at distinct poses with `value` on >= 2 beams
+    std::optional<Pose2d> last_pose;
+
+    [[nodiscard]] bool recognised(std::size_t needed) const { return evidence >= needed; }
+
+    void observe(const std::vector<double>& ranges, const std::optional<Pose2d>& pose) {
+      double top = -std::numeric_limits<double>::infinity();
+      std::size_t hits = 0;
+      for (const double r : ranges) {
+        if (!(std::isfinite(r) && r > 0)) continue;
+        if (r > top) {
+          top = r;
+          hits = 0;
+        }
+        hits += r == top ? 1 : 0;
+      }
+      if (top < value) return;
+      if (top > value) {  // a larger reading: the previous value was not the saturation
+        value = top;
+        evidence = 0;
+        last_pose.reset();
+      }
+      if (hits < 2) return;
+      // The same reading from the same place is no evidence (a robot standing still).
+      constexpr double moved_xy = 0.05, moved_theta = 0.05;
+      if (pose && last_pose &&
+          std::hypot(pose->x - last_pose->x, pose->y - last_pose->y) <= moved_xy &&
+          std::abs(angle_difference(pose->theta, last_pose->theta)) <= moved_theta)
+        return;
+      ++evidence;
+      last_pose = pose;
+    }
+  };
+
+  /// A parsed record whose scan is built when it is returned (with the saturation value known
+  /// by then).
+  struct Pending {
+    CarmenRecord record;
+    ScanGeometry<double> geometry{};  ///< lasers: range_max before saturation
+    std::vector<double> ranges, remissions;
+  };
+
   static CarmenReaderOptions validated(const CarmenReaderOptions& options) {
     ::rangenav::detail::require_non_negative("CarmenReader", "options.range_min",
                                              options.range_min);
@@ -142,7 +235,58 @@ class CarmenReader {
             "must exceed options.range_min = " +
                 ::rangenav::detail::format_value(options.range_min));
     }
+    if (options.saturation_evidence == 0)
+      ::rangenav::detail::throw_invalid_argument("CarmenReader", "options.saturation_evidence",
+                                                 options.saturation_evidence, "must be >= 1");
+    options.limits.validate("CarmenReader");
     return options;
+  }
+
+  [[nodiscard]] bool detecting() const { return options_.detect_saturation && !options_.range_max; }
+
+  // Holding back the first saturation_lookahead laser records: the evidence they hold decides
+  // for them too.
+  [[nodiscard]] bool holding() const {
+    return detecting() && lasers_read_ < options_.saturation_lookahead;
+  }
+
+  CarmenRecord pop() {
+    Pending p = std::move(pending_.front());
+    pending_.pop_front();
+    if (auto* laser = std::get_if<CarmenLaser>(&p.record)) {
+      ScanGeometry<double> g = p.geometry;
+      if (detecting()) {
+        const Saturation& s = saturation_[static_cast<std::size_t>(laser->type)];
+        if (s.recognised(options_.saturation_evidence) && s.value < g.range_max &&
+            s.value > g.range_min)
+          g.range_max = s.value;
+      }
+      // The geometry was validated when the line was parsed; a lower range_max above
+      // range_min keeps it valid.
+      laser->scan =
+          LaserScan<double>(g, std::move(p.ranges), std::move(p.remissions), laser->timestamp);
+    }
+    return std::move(p.record);
+  }
+
+  // Parses the next record into pending_; false at the end of the file.
+  bool parse_next() {
+    std::string_view line;
+    while (lines_.next(line)) {
+      detail::split_whitespace(line, tokens_);
+      if (tokens_.empty() || tokens_[0].front() == '#') continue;
+      const std::string_view tag = tokens_[0];
+      if (tag == "FLASER") return parse_old_laser(CarmenLaserType::flaser);
+      if (tag == "RLASER") return parse_old_laser(CarmenLaserType::rlaser);
+      if (tag == "ODOM") return parse_odometry();
+      if (tag == "ROBOTLASER1") return parse_new_laser(CarmenLaserType::robotlaser1);
+      if (tag == "RAWLASER1") return parse_new_laser(CarmenLaserType::rawlaser1);
+      if (tag == "RAWLASER2") return parse_new_laser(CarmenLaserType::rawlaser2);
+      if (tag == "RAWLASER3") return parse_new_laser(CarmenLaserType::rawlaser3);
+      if (tag == "RAWLASER4") return parse_new_laser(CarmenLaserType::rawlaser4);
+      if (tag == "PARAM") parse_param();
+    }
+    return false;
   }
 
   [[noreturn]] void fail(std::string_view message) const {
@@ -158,6 +302,15 @@ class CarmenReader {
     return value;
   }
 
+  // A pose, timestamp, velocity or configuration field: NaN or inf there is a malformed line.
+  double finite(std::size_t index) const {
+    const double value = number(index);
+    if (!std::isfinite(value))
+      fail("field " + std::to_string(index + 1) + " is not a finite number: '" +
+           std::string(tokens_[index]) + "'");
+    return value;
+  }
+
   std::size_t count(std::size_t index) const {
     std::size_t value = 0;
     if (!detail::parse_count(tokens_[index], value))
@@ -167,7 +320,7 @@ class CarmenReader {
   }
 
   Pose2d pose(std::size_t index) const {
-    return {number(index), number(index + 1), number(index + 2)};
+    return {finite(index), finite(index + 1), finite(index + 2)};
   }
 
   std::vector<double> numbers(std::size_t first, std::size_t n) const {
@@ -180,30 +333,41 @@ class CarmenReader {
   // Reads "ipc_timestamp host logger_timestamp" starting at `index`.
   template <class Record>
   void stamp(Record& record, std::size_t index) const {
-    record.timestamp = number(index);
+    record.timestamp = finite(index);
     record.host = std::string(tokens_[index + 1]);
-    record.logger_timestamp = number(index + 2);
+    record.logger_timestamp = finite(index + 2);
     record.line = lines_.line_number();
   }
 
-  LaserScan<double> make_scan(double angle_min, double angle_increment, double range_max,
-                              std::vector<double> ranges, std::vector<double> intensities,
-                              double timestamp) const {
+  // Validates the scan layout now, while the line is current, and queues the record.
+  void queue_laser(CarmenLaser laser, double angle_min, double angle_increment, double range_max,
+                   std::vector<double> ranges, std::vector<double> remissions) {
     if (options_.range_max) range_max = *options_.range_max;
     if (!(std::isfinite(range_max) && range_max > options_.range_min))
       fail("max range " + ::rangenav::detail::format_value(range_max) + " must exceed range_min " +
            ::rangenav::detail::format_value(options_.range_min) +
            " (set CarmenReaderOptions::range_max to override)");
-    const std::size_t n = ranges.size();
+    const ScanGeometry<double> geometry{angle_min, angle_increment, ranges.size(),
+                                        options_.range_min, range_max};
     try {
-      return LaserScan<double>(
-          ScanGeometry<double>{angle_min, angle_increment, n, options_.range_min, range_max},
-          std::move(ranges), std::move(intensities), timestamp);
+      geometry.validate("LaserScan");
     } catch (const invalid_argument& e) {
       std::string_view what = e.what();
       if (what.starts_with("rangenav: ")) what.remove_prefix(10);
       fail(what);
     }
+    if (detecting())
+      saturation_[static_cast<std::size_t>(laser.type)].observe(ranges, laser.odom_pose);
+    ++lasers_read_;
+    pending_.push_back(
+        {CarmenRecord{std::move(laser)}, geometry, std::move(ranges), std::move(remissions)});
+  }
+
+  // n + k as text, without overflowing for a crafted count.
+  static std::string sum_text(std::size_t n, std::size_t k) {
+    std::size_t sum = 0;
+    if (detail::checked_add(n, k, sum)) return std::to_string(sum);
+    return std::to_string(n) + " + " + std::to_string(k);
   }
 
   // carmen_laser_guess_angle_increment of CARMEN's readlog.
@@ -216,18 +380,18 @@ class CarmenReader {
   }
 
   // FLASER / RLASER n r1..rn x y theta odom_x odom_y odom_theta ipc_ts host logger_ts
-  CarmenLaser parse_old_laser(CarmenLaserType type) {
+  bool parse_old_laser(CarmenLaserType type) {
     constexpr std::size_t trailer = 9;
     if (tokens_.size() < 2) fail("missing the beam count");
     const std::size_t n = count(1);
+    // Compared without n + trailer, which a crafted count overflows.
     const std::size_t remaining = tokens_.size() - 2;
-    if (remaining != n + trailer) {
-      if (remaining < trailer)
-        fail("too few fields: expected " + std::to_string(n + trailer) +
-             " after the beam count, found " + std::to_string(remaining));
+    if (remaining < trailer)
+      fail("too few fields: expected " + sum_text(n, trailer) + " after the beam count, found " +
+           std::to_string(remaining));
+    if (n != remaining - trailer)
       fail("expected " + std::to_string(n) + " ranges, found " +
            std::to_string(remaining - trailer));
-    }
     CarmenLaser laser;
     laser.type = type;
     std::vector<double> ranges = numbers(2, n);
@@ -236,14 +400,13 @@ class CarmenReader {
     stamp(laser, 8 + n);
     const std::optional<double>& param =
         type == CarmenLaserType::flaser ? front_laser_max_ : rear_laser_max_;
-    laser.scan =
-        make_scan(-std::numbers::pi / 2, old_laser_increment(n), param.value_or(default_range_max),
-                  std::move(ranges), {}, laser.timestamp);
-    return laser;
+    queue_laser(std::move(laser), -std::numbers::pi / 2, old_laser_increment(n),
+                param.value_or(default_range_max), std::move(ranges), {});
+    return true;
   }
 
   // RAWLASERk / ROBOTLASER1: see the top of this file.
-  CarmenLaser parse_new_laser(CarmenLaserType type) {
+  bool parse_new_laser(CarmenLaserType type) {
     const bool robot = type == CarmenLaserType::robotlaser1;
     const std::size_t trailer = robot ? 14 : 3;
     constexpr std::size_t head = 9;  // tag, 7 configuration fields, beam count
@@ -251,20 +414,20 @@ class CarmenReader {
       fail("too few fields: expected at least " + std::to_string(head + trailer) + ", found " +
            std::to_string(tokens_.size() - 1));
     const std::size_t n = count(8);
+    // Every comparison subtracts from the fields present, which no crafted count overflows.
     const std::size_t remaining = tokens_.size() - head;
-    if (remaining < n + 1 + trailer) {
-      if (remaining < 1 + trailer)
-        fail("too few fields: expected " + std::to_string(n + 1 + trailer) +
-             " after the beam count, found " + std::to_string(remaining));
+    if (remaining < 1 + trailer)
+      fail("too few fields: expected " + sum_text(n, 1 + trailer) +
+           " after the beam count, found " + std::to_string(remaining));
+    if (n > remaining - 1 - trailer)
       fail("expected " + std::to_string(n) + " ranges, found " +
            std::to_string(remaining - 1 - trailer));
-    }
     const std::size_t m = count(head + n);
-    if (remaining != n + 1 + m + trailer)
+    if (m != remaining - 1 - trailer - n)
       fail("expected " + std::to_string(m) + " remissions, found " +
            std::to_string(remaining - n - 1 - trailer));
     for (std::size_t i = 1; i < 8; ++i)
-      (void)number(i);  // the configuration must be numeric
+      (void)finite(i);  // the configuration must be numeric and finite
     const double start_angle = number(2);
     const double angular_resolution = number(4);
     const double max_range = number(5);
@@ -278,26 +441,27 @@ class CarmenReader {
       laser.laser_pose = pose(next_field);
       laser.odom_pose = pose(next_field + 3);
       for (std::size_t i = 6; i < 11; ++i)
-        (void)number(next_field + i);
+        (void)finite(next_field + i);
       next_field += 11;
     }
     stamp(laser, next_field);
-    laser.scan = make_scan(start_angle, angular_resolution, max_range, std::move(ranges),
-                           std::move(remissions), laser.timestamp);
-    return laser;
+    queue_laser(std::move(laser), start_angle, angular_resolution, max_range, std::move(ranges),
+                std::move(remissions));
+    return true;
   }
 
   // ODOM x y theta tv rv accel ipc_ts host logger_ts
-  CarmenOdometry parse_odometry() {
+  bool parse_odometry() {
     if (tokens_.size() != 10)
       fail("expected 9 fields, found " + std::to_string(tokens_.size() - 1));
     CarmenOdometry odom;
     odom.pose = pose(1);
-    odom.tv = number(4);
-    odom.rv = number(5);
-    odom.accel = number(6);
+    odom.tv = finite(4);
+    odom.rv = finite(5);
+    odom.accel = finite(6);
     stamp(odom, 7);
-    return odom;
+    pending_.push_back({CarmenRecord{std::move(odom)}, {}, {}, {}});
+    return true;
   }
 
   void parse_param() {
@@ -322,15 +486,28 @@ class CarmenReader {
   std::map<std::string, std::string> params_;
   std::optional<double> front_laser_max_;
   std::optional<double> rear_laser_max_;
+  std::array<Saturation, laser_types> saturation_{};
+  std::deque<Pending> pending_;
+  std::size_t lasers_read_{0};
+  bool finished_{false};
+  std::exception_ptr error_;
 };
 
-/// Every laser record of a log, in file order (odometry records are dropped).
+/// Every laser record of a log, in file order (odometry records are dropped). Throws io_error
+/// when the log holds more than options.limits.max_points laser records.
 inline std::vector<CarmenLaser> read_carmen_lasers(const std::filesystem::path& path,
                                                    CarmenReaderOptions options = {}) {
   CarmenReader reader(path, options);
   std::vector<CarmenLaser> lasers;
   while (auto record = reader.next())
-    if (auto* laser = std::get_if<CarmenLaser>(&*record)) lasers.push_back(std::move(*laser));
+    if (auto* laser = std::get_if<CarmenLaser>(&*record)) {
+      if (lasers.size() == options.limits.max_points)
+        throw io_error("rangenav: carmen: " + path.string() + ":" + std::to_string(laser->line) +
+                       ": " +
+                       detail::exceeds_limit("laser record count", lasers.size() + 1, "max_points",
+                                             options.limits.max_points));
+      lasers.push_back(std::move(*laser));
+    }
   return lasers;
 }
 

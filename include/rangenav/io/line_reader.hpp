@@ -5,14 +5,17 @@
 //
 // A gzip file is recognised by its magic bytes (1f 8b), not by its name, and is read through
 // zlib when RANGENAV_HAVE_ZLIB is defined (the CMake target defines it when zlib is found);
-// without zlib such a file raises io_error saying so.
+// without zlib such a file raises io_error saying so. A line longer than the reader's limit
+// (ReaderLimits::max_line_bytes) raises io_error instead of growing the buffer without bound.
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cstddef>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <istream>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -20,6 +23,7 @@
 #include <vector>
 
 #include "rangenav/core/error.hpp"
+#include "rangenav/io/reader_limits.hpp"
 
 #ifdef RANGENAV_HAVE_ZLIB
 #include <zlib.h>
@@ -32,9 +36,14 @@ namespace rangenav::io {
 class LineReader {
  public:
   /// Opens `path`; `where` prefixes error messages ("rangenav: <where>: <path>: ...").
-  /// Throws io_error when the file cannot be opened or is gzip-compressed and zlib is missing.
-  LineReader(const std::filesystem::path& path, std::string_view where)
-      : path_(path), where_(where), buffer_(std::size_t{1} << 16) {
+  /// Throws io_error when the file cannot be opened or is gzip-compressed and zlib is missing;
+  /// next() throws io_error for a line longer than `max_line_bytes`.
+  LineReader(const std::filesystem::path& path, std::string_view where,
+             std::size_t max_line_bytes = ReaderLimits{}.max_line_bytes)
+      : path_(path),
+        where_(where),
+        max_line_(std::max<std::size_t>(max_line_bytes, 1)),
+        buffer_(std::min<std::size_t>(std::size_t{1} << 16, max_line_ + 1)) {
     std::FILE* f = std::fopen(path.c_str(), "rb");
     if (f == nullptr) {
       const int err = errno;
@@ -132,20 +141,35 @@ class LineReader {
 #endif
 
   bool emit(std::string_view& line, const char* first, std::size_t length) {
-    if (length > 0 && first[length - 1] == '\r') --length;
-    line = std::string_view(first, length);
     ++line_number_;
+    if (length > 0 && first[length - 1] == '\r') --length;
+    if (length > max_line_) fail_long_line();
+    line = std::string_view(first, length);
     return true;
   }
 
-  // Moves the unread tail to the front, grows the buffer when one line fills it, and reads more.
+  // Called with line_number_ already counting the line being read.
+  [[noreturn]] void fail_long_line() {
+    terminated_ = true;
+    fail_line("line longer than ReaderLimits::max_line_bytes = " + std::to_string(max_line_) +
+              " bytes");
+  }
+
+  // Moves the unread tail to the front, grows the buffer when one line fills it (up to the line
+  // limit), and reads more.
   void refill() {
     if (begin_ > 0) {
       std::memmove(buffer_.data(), buffer_.data() + begin_, end_ - begin_);
       end_ -= begin_;
       begin_ = 0;
     }
-    if (end_ == buffer_.size()) buffer_.resize(buffer_.size() * 2);
+    if (end_ == buffer_.size()) {
+      if (end_ > max_line_) {
+        ++line_number_;
+        fail_long_line();
+      }
+      buffer_.resize(std::min(buffer_.size() * 2, max_line_ + 1));
+    }
     const std::size_t got = read_some(buffer_.data() + end_, buffer_.size() - end_);
     if (got == 0) eof_ = true;
     end_ += got;
@@ -154,7 +178,8 @@ class LineReader {
   std::size_t read_some(char* destination, std::size_t capacity) {
 #ifdef RANGENAV_HAVE_ZLIB
     if (gz_) {
-      const int got = gzread(gz_.get(), destination, static_cast<unsigned>(capacity));
+      const int got = gzread(gz_.get(), destination,
+                             static_cast<unsigned>(std::min<std::size_t>(capacity, 1U << 30)));
       // zlib stops at a truncated stream without an error code from gzread; gzerror says so.
       if (got <= 0) {
         int code = Z_OK;
@@ -171,6 +196,7 @@ class LineReader {
 
   std::filesystem::path path_;
   std::string where_;
+  std::size_t max_line_;
   std::unique_ptr<std::FILE, FileCloser> file_;
 #ifdef RANGENAV_HAVE_ZLIB
   std::unique_ptr<gzFile_s, GzCloser> gz_;
@@ -199,6 +225,33 @@ inline void split_whitespace(std::string_view line, std::vector<std::string_view
     while (i < n && line[i] != ' ' && line[i] != '\t')
       ++i;
     tokens.push_back(line.substr(start, i - start));
+  }
+}
+
+/// std::getline with a bound: the next line of `in` without its '\n' into `line`, or false at the
+/// end of the stream. A line longer than `max_bytes` stops the read with `too_long` set (and
+/// true returned), so a stream without line breaks cannot grow `line` without bound.
+inline bool read_bounded_line(std::istream& in, std::string& line, std::size_t max_bytes,
+                              bool& too_long) {
+  line.clear();
+  too_long = false;
+  const std::istream::sentry ok(in, true);
+  if (!ok) return false;
+  std::streambuf* buffer = in.rdbuf();
+  bool any = false;
+  for (;;) {
+    const int c = buffer->sbumpc();
+    if (c == std::char_traits<char>::eof()) {
+      in.setstate(any ? std::ios::eofbit : std::ios::eofbit | std::ios::failbit);
+      return any;
+    }
+    any = true;
+    if (c == '\n') return true;
+    if (line.size() >= max_bytes) {
+      too_long = true;
+      return true;
+    }
+    line.push_back(static_cast<char>(c));
   }
 }
 

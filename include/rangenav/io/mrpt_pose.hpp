@@ -63,12 +63,15 @@ inline std::string gunzip(std::string_view format, const std::filesystem::path& 
 /// Reads an MRPT pose file (gzip-compressed or plain) as a rigid transform: the column-major 4x4
 /// matrix, its rotation re-orthonormalised (float32 rounding) through a unit quaternion.
 /// Throws io_error naming the file when it cannot be read, is gzip-compressed without zlib, is
-/// corrupt or truncated, does not hold exactly 16 float32, has a non-finite value, a last row
-/// other than (0, 0, 0, 1) or a rotation that is not orthonormal (tolerance 1e-3).
+/// corrupt or truncated, larger than 1 MiB, does not hold exactly 16 float32, has a non-finite
+/// value, a last row other than (0, 0, 0, 1) or a rotation that is not orthonormal (tolerance
+/// 1e-3).
 [[nodiscard]] inline Transform3d read_mrpt_pose(const std::filesystem::path& path) {
   constexpr std::string_view format = "MRPT pose";
   constexpr std::size_t expected = 16 * sizeof(float);
-  std::string bytes = detail::read_whole_file(format, path);
+  // A pose file is under a hundred bytes, compressed or not: nothing larger is read into memory.
+  constexpr std::size_t max_file_bytes = std::size_t{1} << 20;
+  std::string bytes = detail::read_whole_file(format, path, max_file_bytes);
   if (detail::is_gzip(bytes)) {
 #ifdef RANGENAV_HAVE_ZLIB
     bytes = detail::gunzip(format, path, bytes, expected);

@@ -13,8 +13,10 @@
 // Every other field (curvature, padding "_", descriptors of any SIZE / TYPE / COUNT) is skipped.
 // Organised clouds (HEIGHT > 1) stay organised, NaN points in place.
 
+#include <algorithm>
 #include <array>
 #include <bit>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -29,6 +31,7 @@
 #include "rangenav/core/types.hpp"
 #include "rangenav/io/detail/fields.hpp"
 #include "rangenav/io/detail/lzf.hpp"
+#include "rangenav/io/reader_limits.hpp"
 
 namespace rangenav::io {
 
@@ -198,8 +201,8 @@ inline PcdHeader parse_pcd_header(std::string_view text, const std::filesystem::
         fail("VIEWPOINT needs 7 values (tx ty tz qw qx qy qz), got " +
              std::to_string(tok.size() - 1));
       for (std::size_t i = 0; i < 7; ++i)
-        if (!parse_number(tok[i + 1], h.viewpoint[i]))
-          fail("VIEWPOINT value " + quote_token(tok[i + 1]) + " is not a number");
+        if (!parse_number(tok[i + 1], h.viewpoint[i]) || !std::isfinite(h.viewpoint[i]))
+          fail("VIEWPOINT value " + quote_token(tok[i + 1]) + " is not a finite number");
     } else if (key == "DATA") {
       if (tok.size() != 2) fail("DATA needs one value (ascii, binary or binary_compressed)");
       if (tok[1] == "ascii") {
@@ -222,13 +225,31 @@ inline PcdHeader parse_pcd_header(std::string_view text, const std::filesystem::
         h.fields[i].type = types[i];
         h.fields[i].count = have_count ? counts[i] : 1;
       }
+      std::size_t area = 0;
+      if (!checked_mul(h.width, h.height, area))
+        fail("WIDTH*HEIGHT = " + std::to_string(h.width) + "*" + std::to_string(h.height) +
+             " overflows");
       if (!have_points) {
-        h.points = h.width * h.height;
-      } else if (h.points != h.width * h.height) {
+        h.points = area;
+      } else if (h.points != area) {
         throw_io(pcd, path, points_line,
                  "POINTS " + std::to_string(h.points) + " does not equal WIDTH*HEIGHT = " +
                      std::to_string(h.width) + "*" + std::to_string(h.height));
       }
+      // Every byte offset and count below derives from these sums: check them here, once.
+      std::size_t point_size = 0, tokens = 0;
+      for (const auto& f : h.fields) {
+        std::size_t field_bytes = 0;
+        if (!checked_mul(f.size, f.count, field_bytes) ||
+            !checked_add(point_size, field_bytes, point_size) ||
+            !checked_add(tokens, f.count, tokens))
+          fail("field " + quote_token(f.name) + ": SIZE*COUNT = " + std::to_string(f.size) + "*" +
+               std::to_string(f.count) + " overflows the point size");
+      }
+      std::size_t data_bytes = 0;
+      if (!checked_mul(point_size, h.points, data_bytes))
+        fail("POINTS*point size = " + std::to_string(h.points) + "*" + std::to_string(point_size) +
+             " overflows");
       for (const char* axis : {"x", "y", "z"})
         if (!h.field_index(axis))
           throw_io(pcd, path, fields_line, std::string("FIELDS has no '") + axis + "'");
@@ -313,13 +334,11 @@ inline std::uint32_t pack_pcd_color(const Rgba& c) {
 }
 
 template <class Scalar>
-void resize_pcd_cloud(const PcdHeader& h, const PcdLayout& l, Cloud<3, Scalar>& cloud) {
-  cloud.width = h.width;
-  cloud.height = h.height;
-  cloud.points.resize(h.points);
-  if (l.intensity.present) cloud.intensities.resize(h.points);
-  if (l.color.present) cloud.colors.resize(h.points);
-  if (l.has_normals) cloud.normals.resize(h.points);
+void resize_pcd_cloud(const PcdLayout& l, std::size_t n, Cloud<3, Scalar>& cloud) {
+  cloud.points.resize(n);
+  if (l.intensity.present) cloud.intensities.resize(n);
+  if (l.color.present) cloud.colors.resize(n);
+  if (l.has_normals) cloud.normals.resize(n);
 }
 
 /// Decodes fixed-size records. DATA binary: field s of point i is at base + i * point_size +
@@ -374,7 +393,7 @@ void decode_pcd_ascii(std::string_view text, const PcdHeader& h, const PcdLayout
   LineCursor cursor(text, h.data_offset, h.data_line);
   std::string_view line;
   std::vector<std::string_view> tok;
-  tok.reserve(l.tokens);
+  tok.reserve(std::min<std::size_t>(l.tokens, 256));
   std::size_t i = 0;
   const auto bad = [&](const PcdSlot& s, std::string_view what) {
     throw_io(pcd, path, cursor.line(),
@@ -390,6 +409,10 @@ void decode_pcd_ascii(std::string_view text, const PcdHeader& h, const PcdLayout
     if (i == h.points)
       throw_io(pcd, path, cursor.line(),
                "more data lines than the " + std::to_string(h.points) + " POINTS of the header");
+    // Grown as lines arrive: a header promising more points than the file holds allocates no
+    // more than the file holds.
+    if (i == cloud.points.size())
+      resize_pcd_cloud(l, std::min(h.points, std::max<std::size_t>(1024, 2 * i)), cloud);
     if (tok.size() != l.tokens)
       throw_io(pcd, path, cursor.line(),
                "point " + std::to_string(i) + " has " + std::to_string(tok.size()) +
@@ -417,15 +440,30 @@ void decode_pcd_ascii(std::string_view text, const PcdHeader& h, const PcdLayout
 
 }  // namespace detail
 
-/// Reads only the header of a PCD file.
-inline PcdHeader read_pcd_header(const std::filesystem::path& path) {
+/// Reads only the header of a PCD file. Throws io_error naming file and line for a malformed
+/// header, and for a header line longer than limits.max_line_bytes or a header longer than
+/// limits.max_bytes.
+inline PcdHeader read_pcd_header(const std::filesystem::path& path,
+                                 const ReaderLimits& limits = {}) {
+  limits.validate("read_pcd_header");
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     detail::throw_io(detail::pcd, path, 0, "is a directory");
   std::ifstream in(path, std::ios::binary);
   if (!in) detail::throw_io(detail::pcd, path, 0, "cannot open file for reading");
   std::string text, line;
-  while (std::getline(in, line)) {
+  bool too_long = false;
+  std::size_t number = 0;
+  while (detail::read_bounded_line(in, line, limits.max_line_bytes, too_long)) {
+    ++number;
+    if (too_long)
+      detail::throw_io(detail::pcd, path, number,
+                       detail::exceeds_limit("header line length", line.size() + 1,
+                                             "max_line_bytes", limits.max_line_bytes));
+    if (text.size() + line.size() + 1 > limits.max_bytes)
+      detail::throw_io(detail::pcd, path, number,
+                       detail::exceeds_limit("header size", text.size() + line.size() + 1,
+                                             "max_bytes", limits.max_bytes));
     text.append(line).push_back('\n');
     const auto start = line.find_first_not_of(" \t");
     if (start != std::string::npos && line.compare(start, 4, "DATA") == 0) break;
@@ -434,22 +472,26 @@ inline PcdHeader read_pcd_header(const std::filesystem::path& path) {
 }
 
 /// Reads a PCD file (DATA ascii, binary or binary_compressed) into a Cloud; fields are converted
-/// to Scalar. Throws io_error naming the file (and the line for text) on any malformed content.
+/// to Scalar. Throws io_error naming the file (and the line for text) on any malformed content:
+/// a count or size whose product overflows, a header that promises more data than the file holds,
+/// a cloud beyond `limits` (checked before anything is allocated), an infinite value (NaN points
+/// are kept: PCL marks missing points of organised clouds so).
 template <std::floating_point Scalar = double>
-Cloud<3, Scalar> read_pcd(const std::filesystem::path& path) {
+Cloud<3, Scalar> read_pcd(const std::filesystem::path& path, const ReaderLimits& limits = {}) {
   using namespace detail;
-  const std::string bytes = read_whole_file(pcd, path);
+  limits.validate("read_pcd");
+  const std::string bytes = read_whole_file(pcd, path, limits.max_bytes);
   const PcdHeader h = parse_pcd_header(bytes, path);
   const PcdLayout l = pcd_layout(h, path);
-  Cloud<3, Scalar> cloud;
-  resize_pcd_cloud(h, l, cloud);
+  // parse_pcd_header checked that these products and sums fit std::size_t.
   const std::size_t point_size = h.point_size();
   const std::size_t need = point_size * h.points;
   const std::size_t have = bytes.size() - h.data_offset;
   const auto* data = reinterpret_cast<const unsigned char*>(bytes.data()) + h.data_offset;
+  // Before allocating anything: the file must hold the data its header promises.
+  std::size_t compressed = 0;
   switch (h.data) {
-    case PcdFormat::ascii:
-      decode_pcd_ascii(bytes, h, l, path, cloud);
+    case PcdFormat::ascii:  // the cloud grows as lines arrive (decode_pcd_ascii)
       break;
     case PcdFormat::binary:
       if (have < need)
@@ -457,12 +499,11 @@ Cloud<3, Scalar> read_pcd(const std::filesystem::path& path) {
                  "binary data has " + std::to_string(have) + " bytes but " +
                      std::to_string(h.points) + " points of " + std::to_string(point_size) +
                      " bytes need " + std::to_string(need) + " (truncated file?)");
-      decode_pcd_records(data, l, point_size, false, cloud);
       break;
     case PcdFormat::binary_compressed: {
       if (have < 8)
         throw_io(pcd, path, 0, "binary_compressed data ends before its 8-byte size header");
-      const std::size_t compressed = load_le<std::uint32_t>(data);
+      compressed = load_le<std::uint32_t>(data);
       const std::size_t uncompressed = load_le<std::uint32_t>(data + 4);
       if (uncompressed != need)
         throw_io(pcd, path, 0,
@@ -474,6 +515,33 @@ Cloud<3, Scalar> read_pcd(const std::filesystem::path& path) {
                  "binary_compressed data has " + std::to_string(have - 8) +
                      " compressed bytes but its header says " + std::to_string(compressed) +
                      " (truncated file?)");
+      if (need > limits.max_bytes)
+        throw_io(
+            pcd, path, 0,
+            exceeds_limit("binary_compressed unpacked size", need, "max_bytes", limits.max_bytes));
+      // A 3-byte LZF back reference copies at most 264 bytes: no stream expands more.
+      if (need / lzf_max_expansion > compressed)
+        throw_io(pcd, path, 0,
+                 "binary_compressed data is corrupt (" + std::to_string(compressed) +
+                     " LZF bytes cannot unpack to " + std::to_string(need) + ")");
+      break;
+    }
+  }
+  check_cloud_size(
+      pcd, path, h.data_line, h.points,
+      cloud_bytes_per_point<Scalar>(l.intensity.present, l.color.present, l.has_normals), limits);
+  Cloud<3, Scalar> cloud;
+  cloud.width = h.width;
+  cloud.height = h.height;
+  if (h.data != PcdFormat::ascii) resize_pcd_cloud(l, h.points, cloud);
+  switch (h.data) {
+    case PcdFormat::ascii:
+      decode_pcd_ascii(bytes, h, l, path, cloud);
+      break;
+    case PcdFormat::binary:
+      decode_pcd_records(data, l, point_size, false, cloud);
+      break;
+    case PcdFormat::binary_compressed: {
       std::vector<std::uint8_t> columns(need);
       if (lzf_decompress(data + 8, compressed, columns.data(), columns.size()) != need)
         throw_io(pcd, path, 0,
@@ -483,6 +551,7 @@ Cloud<3, Scalar> read_pcd(const std::filesystem::path& path) {
       break;
     }
   }
+  require_no_infinity(pcd, path, cloud);
   return cloud;
 }
 

@@ -29,6 +29,7 @@
 #include "rangenav/core/types.hpp"
 #include "rangenav/io/detail/fields.hpp"
 #include "rangenav/io/line_reader.hpp"
+#include "rangenav/io/reader_limits.hpp"
 
 namespace rangenav::io {
 
@@ -228,6 +229,23 @@ void store_ply_vertex(const PlyVertexMap& m, std::size_t i, Cloud<3, Scalar>& cl
       value(m.normal[k], cloud.normals[i][Eigen::Index(k)]);
 }
 
+/// Sizes the cloud's points and the attributes the vertex map keeps to n.
+template <class Scalar>
+void resize_ply_cloud(const PlyVertexMap& m, std::size_t n, Cloud<3, Scalar>& cloud) {
+  cloud.points.resize(n);
+  if (m.intensity >= 0) cloud.intensities.resize(n);
+  if (m.has_colors()) cloud.colors.resize(n);
+  if (m.has_normals()) cloud.normals.resize(n);
+}
+
+/// Grows the cloud to hold vertex i of n as vertices arrive (amortised doubling): a header that
+/// promises more vertices than the file holds allocates no more than the file holds.
+template <class Scalar>
+void grow_ply_cloud(const PlyVertexMap& m, std::size_t i, std::size_t n, Cloud<3, Scalar>& cloud) {
+  if (i == cloud.points.size())
+    resize_ply_cloud(m, std::min(n, std::max<std::size_t>(1024, 2 * i)), cloud);
+}
+
 /// A colour channel from a value of type t: integers saturate, floats are fractions of 255.
 template <class In>
 std::uint8_t ply_channel(In v, ValueType t) {
@@ -255,12 +273,14 @@ void read_ply_binary(std::string_view bytes, const PlyHeader& h, std::size_t ver
       const std::size_t record = el.record_size();
       const std::size_t left = bytes.size() - pos;
       if (record != 0 && left / record < el.count) truncated(left / record);
+      // record * count fits: it is at most `left`.
       std::size_t o = 0;
       for (std::size_t j = 0; j < el.properties.size(); ++j) {
         offsets[j] = o;
         o += value_size(el.properties[j].type);
       }
       if (keep) {
+        resize_ply_cloud(m, el.count, cloud);  // the data holds them: checked above
         for (std::size_t i = 0; i < el.count; ++i) {
           const unsigned char* base = data + pos + i * record;
           store_ply_vertex(m, i, cloud, [&](int j, auto& out) {
@@ -285,9 +305,14 @@ void read_ply_binary(std::string_view bytes, const PlyHeader& h, std::size_t ver
         offsets[j] = pos - start;
         if (p.is_list) {
           if (bytes.size() - pos < value_size(p.count_type)) truncated(i);
-          const auto n = load_as<std::uint64_t>(data + pos, p.count_type);
+          const auto n = load_as<std::int64_t>(data + pos, p.count_type);
           pos += value_size(p.count_type);
-          if ((bytes.size() - pos) / value_size(p.type) < n) truncated(i);
+          if (n < 0)
+            throw_io(ply, path, 0,
+                     "element '" + el.name + "' " + std::to_string(i) + ": list " +
+                         quote_token(p.name) + " has a negative length " + std::to_string(n));
+          if ((bytes.size() - pos) / value_size(p.type) < static_cast<std::uint64_t>(n))
+            truncated(i);
           pos += static_cast<std::size_t>(n) * value_size(p.type);
         } else {
           if (bytes.size() - pos < value_size(p.type)) truncated(i);
@@ -295,6 +320,7 @@ void read_ply_binary(std::string_view bytes, const PlyHeader& h, std::size_t ver
         }
       }
       if (keep) {
+        grow_ply_cloud(m, i, el.count, cloud);
         store_ply_vertex(m, i, cloud, [&](int j, auto& out) {
           const auto& p = el.properties[static_cast<std::size_t>(j)];
           const unsigned char* at = data + start + offsets[static_cast<std::size_t>(j)];
@@ -338,11 +364,16 @@ void read_ply_ascii(std::string_view text, const PlyHeader& h, std::size_t verte
         const auto& p = el.properties[j];
         token_of[j] = t;
         if (p.is_list) {
-          std::uint64_t n = 0;
-          if (t >= tok.size() || !parse_as(tok[t], p.count_type, n))
+          std::int64_t n = 0;
+          if (t >= tok.size() || !parse_as(tok[t], p.count_type, n) || n < 0)
             throw_io(ply, path, cursor.line(),
                      instance() + ": list length of " + quote_token(p.name) +
                          " is missing or not a valid count");
+          if (static_cast<std::uint64_t>(n) > tok.size() - t - 1)
+            throw_io(ply, path, cursor.line(),
+                     instance() + ": list " + quote_token(p.name) + " has " + std::to_string(n) +
+                         " items but the line holds " + std::to_string(tok.size() - t - 1) +
+                         " more values");
           t += 1 + static_cast<std::size_t>(n);
         } else {
           ++t;
@@ -353,6 +384,7 @@ void read_ply_ascii(std::string_view text, const PlyHeader& h, std::size_t verte
                  instance() + " has " + std::to_string(tok.size()) +
                      " values but its properties need " + std::to_string(t));
       if (!keep) continue;
+      grow_ply_cloud(m, i, el.count, cloud);
       store_ply_vertex(m, i, cloud, [&](int j, auto& out) {
         const auto& p = el.properties[static_cast<std::size_t>(j)];
         const std::string_view token = tok[token_of[static_cast<std::size_t>(j)]];
@@ -378,11 +410,13 @@ void read_ply_ascii(std::string_view text, const PlyHeader& h, std::size_t verte
 
 /// Reads the vertices of a PLY file (ascii or binary_little_endian) into a Cloud; values are
 /// converted to Scalar. Throws io_error naming the file (and the line for text) on malformed or
-/// unsupported content.
+/// unsupported content, on a vertex count the file cannot hold or beyond `limits` (checked before
+/// anything is allocated) and on an infinite value (NaN is kept, as a missing point).
 template <std::floating_point Scalar = double>
-Cloud<3, Scalar> read_ply(const std::filesystem::path& path) {
+Cloud<3, Scalar> read_ply(const std::filesystem::path& path, const ReaderLimits& limits = {}) {
   using namespace detail;
-  const std::string bytes = read_whole_file(ply, path);
+  limits.validate("read_ply");
+  const std::string bytes = read_whole_file(ply, path, limits.max_bytes);
   const PlyHeader h = parse_ply_header(bytes, path);
   std::size_t vertex = h.elements.size();
   for (std::size_t e = 0; e < h.elements.size(); ++e)
@@ -391,14 +425,18 @@ Cloud<3, Scalar> read_ply(const std::filesystem::path& path) {
       break;
     }
   if (vertex == h.elements.size()) throw_io(ply, path, h.data_line, "no element vertex");
-  const PlyVertexMap m = ply_vertex_map(h.elements[vertex], path);
-  const std::size_t n = h.elements[vertex].count;
+  const PlyElement& v = h.elements[vertex];
+  const PlyVertexMap m = ply_vertex_map(v, path);
+  const std::size_t n = v.count;
+  // Checked before anything is allocated; the cloud itself is sized as the data proves to hold
+  // the vertices (read_ply_binary, read_ply_ascii).
+  check_cloud_size(ply, path, v.line, n,
+                   cloud_bytes_per_point<Scalar>(m.intensity >= 0, m.has_colors(), m.has_normals()),
+                   limits);
   Cloud<3, Scalar> cloud;
-  cloud.points.resize(n);
-  if (m.intensity >= 0) cloud.intensities.resize(n);
-  if (m.has_colors()) cloud.colors.resize(n);
-  if (m.has_normals()) cloud.normals.resize(n);
-  if (h.organized_height > 1 && h.organized_width * h.organized_height == n) {
+  std::size_t organized = 0;
+  if (h.organized_height > 1 && checked_mul(h.organized_width, h.organized_height, organized) &&
+      organized == n) {
     cloud.width = h.organized_width;
     cloud.height = h.organized_height;
   } else {
@@ -409,6 +447,7 @@ Cloud<3, Scalar> read_ply(const std::filesystem::path& path) {
     read_ply_ascii(bytes, h, vertex, m, path, cloud);
   else
     read_ply_binary(bytes, h, vertex, m, path, cloud);
+  require_no_infinity(ply, path, cloud);
   return cloud;
 }
 

@@ -25,6 +25,7 @@
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/io/line_reader.hpp"
+#include "rangenav/io/reader_limits.hpp"
 
 namespace rangenav::io {
 
@@ -37,14 +38,21 @@ struct SlamRelation {
 };
 
 /// Reads a relations file (plain or gzip). Empty lines and lines starting with '#' are skipped.
-inline std::vector<SlamRelation> read_slam_relations(const std::filesystem::path& path) {
-  LineReader reader(path, "slam_relations");
+/// Throws io_error naming file and line for a malformed line (a non-finite number included), a
+/// line longer than limits.max_line_bytes or more than limits.max_points relations.
+inline std::vector<SlamRelation> read_slam_relations(const std::filesystem::path& path,
+                                                     const ReaderLimits& limits = {}) {
+  limits.validate("read_slam_relations");
+  LineReader reader(path, "slam_relations", limits.max_line_bytes);
   std::vector<SlamRelation> relations;
   std::vector<std::string_view> tokens;
   std::string_view line;
   while (reader.next(line)) {
     detail::split_whitespace(line, tokens);
     if (tokens.empty() || tokens.front().starts_with('#')) continue;
+    if (relations.size() == limits.max_points)
+      reader.fail_line(detail::exceeds_limit("relation count", relations.size() + 1, "max_points",
+                                             limits.max_points));
     if (tokens.size() != 8)
       reader.fail_line("expected 8 fields, found " + std::to_string(tokens.size()));
     double v[8];
@@ -76,7 +84,8 @@ struct RelationEvaluation {
 /// Evaluates a trajectory given as poses at `timestamps` (increasing) against `relations`. A
 /// relation's timestamp is matched to the nearest trajectory timestamp within `max_time_offset`
 /// seconds; relations without a match are counted as missing. Throws invalid_argument for
-/// mismatched sizes or timestamps that do not increase.
+/// mismatched sizes, timestamps that do not increase, a non-finite pose or relation, or a
+/// negative local_gap or max_time_offset.
 inline RelationEvaluation evaluate_slam_relations(std::span<const SlamRelation> relations,
                                                   std::span<const double> timestamps,
                                                   std::span<const Pose2d> poses,
@@ -92,6 +101,16 @@ inline RelationEvaluation evaluate_slam_relations(std::span<const SlamRelation> 
       ::rangenav::detail::throw_invalid_argument(where, "timestamps[" + std::to_string(i) + "]",
                                                  timestamps[i], "must exceed the one before");
   ::rangenav::detail::require_non_negative(where, "max_time_offset", max_time_offset);
+  ::rangenav::detail::require_non_negative(where, "local_gap", local_gap);
+  for (std::size_t i = 0; i < poses.size(); ++i)
+    if (!(std::isfinite(poses[i].x) && std::isfinite(poses[i].y) && std::isfinite(poses[i].theta)))
+      ::rangenav::detail::throw_invalid_argument(where, "poses[i]", i, "is not finite");
+  for (std::size_t i = 0; i < relations.size(); ++i) {
+    const SlamRelation& r = relations[i];
+    if (!(std::isfinite(r.first) && std::isfinite(r.second) && std::isfinite(r.delta.x) &&
+          std::isfinite(r.delta.y) && std::isfinite(r.delta.theta)))
+      ::rangenav::detail::throw_invalid_argument(where, "relations[i]", i, "is not finite");
+  }
   const auto find = [&](double t) -> const Pose2d* {
     const auto it = std::lower_bound(timestamps.begin(), timestamps.end(), t);
     std::size_t best = timestamps.size();

@@ -7,7 +7,8 @@
 // Writers print timestamps with microsecond precision ("%.6f") and the pose fields with 9
 // decimals, locale-independent; a planar pose goes to TUM with z = 0 and a rotation about z.
 // Readers skip blank lines and '#' comments, read plain or gzip files (see LineReader), normalise
-// quaternions and angles, and raise io_error naming the file and line for a malformed line.
+// quaternions and angles, and raise io_error naming the file and line for a malformed line (a
+// non-finite number included) and for a file beyond their ReaderLimits (line length, records).
 
 #include <Eigen/Geometry>
 #include <cmath>
@@ -25,6 +26,7 @@
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/io/line_reader.hpp"
+#include "rangenav/io/reader_limits.hpp"
 
 namespace rangenav::io {
 
@@ -92,22 +94,30 @@ inline void close_checked(std::ofstream& out, const std::filesystem::path& path,
 }
 
 // Calls parse(tokens, fail) for every non-comment line of a text stream or file; `fail(message)`
-// throws io_error naming the source and the line.
+// throws io_error naming the source and the line. A line longer than limits.max_line_bytes and
+// more than limits.max_points data lines raise io_error too.
 template <class Parse>
 void for_each_data_line(std::istream& in, std::string_view name, std::string_view where,
-                        Parse&& parse) {
+                        const ReaderLimits& limits, Parse&& parse) {
+  limits.validate(where);
   std::string line;
   std::vector<std::string_view> tokens;
-  std::size_t number = 0;
-  while (std::getline(in, line)) {
+  std::size_t number = 0, records = 0;
+  bool too_long = false;
+  while (read_bounded_line(in, line, limits.max_line_bytes, too_long)) {
     ++number;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    split_whitespace(line, tokens);
-    if (tokens.empty() || tokens[0].front() == '#') continue;
     const auto fail = [&](std::string_view message) {
       throw io_error("rangenav: " + std::string(where) + ": " + std::string(name) + ":" +
                      std::to_string(number) + ": " + std::string(message));
     };
+    if (too_long)
+      fail("line longer than ReaderLimits::max_line_bytes = " +
+           std::to_string(limits.max_line_bytes) + " bytes");
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    split_whitespace(line, tokens);
+    if (tokens.empty() || tokens[0].front() == '#') continue;
+    if (++records > limits.max_points)
+      fail(exceeds_limit("record count", records, "max_points", limits.max_points));
     parse(tokens, fail);
   }
   if (in.bad())
@@ -115,14 +125,19 @@ void for_each_data_line(std::istream& in, std::string_view name, std::string_vie
 }
 
 template <class Parse>
-void for_each_data_line(const std::filesystem::path& path, std::string_view where, Parse&& parse) {
-  LineReader lines(path, where);
+void for_each_data_line(const std::filesystem::path& path, std::string_view where,
+                        const ReaderLimits& limits, Parse&& parse) {
+  limits.validate(where);
+  LineReader lines(path, where, limits.max_line_bytes);
   std::string_view line;
   std::vector<std::string_view> tokens;
+  std::size_t records = 0;
   while (lines.next(line)) {
     split_whitespace(line, tokens);
     if (tokens.empty() || tokens[0].front() == '#') continue;
     const auto fail = [&](std::string_view message) { lines.fail_line(message); };
+    if (++records > limits.max_points)
+      fail(exceeds_limit("record count", records, "max_points", limits.max_points));
     parse(tokens, fail);
   }
 }
@@ -237,18 +252,20 @@ inline void write_tum(const std::filesystem::path& path,
 
 /// Reads a TUM trajectory from a stream; `name` stands for the source in error messages.
 inline std::vector<StampedTransform3d> read_tum(std::istream& in,
-                                                std::string_view name = "<stream>") {
+                                                std::string_view name = "<stream>",
+                                                const ReaderLimits& limits = {}) {
   std::vector<StampedTransform3d> trajectory;
-  detail::for_each_data_line(in, name, "tum", [&](const auto& tokens, const auto& fail) {
+  detail::for_each_data_line(in, name, "tum", limits, [&](const auto& tokens, const auto& fail) {
     trajectory.push_back(detail::parse_tum(tokens, fail));
   });
   return trajectory;
 }
 
 /// Reads a TUM trajectory file (plain or gzip).
-inline std::vector<StampedTransform3d> read_tum(const std::filesystem::path& path) {
+inline std::vector<StampedTransform3d> read_tum(const std::filesystem::path& path,
+                                                const ReaderLimits& limits = {}) {
   std::vector<StampedTransform3d> trajectory;
-  detail::for_each_data_line(path, "tum", [&](const auto& tokens, const auto& fail) {
+  detail::for_each_data_line(path, "tum", limits, [&](const auto& tokens, const auto& fail) {
     trajectory.push_back(detail::parse_tum(tokens, fail));
   });
   return trajectory;
@@ -305,19 +322,21 @@ inline void write_xytheta(const std::filesystem::path& path,
 }
 
 /// Reads "t x y theta" lines from a stream; theta is normalised to (-pi, pi].
-inline std::vector<StampedPose2d> read_xytheta(std::istream& in,
-                                               std::string_view name = "<stream>") {
+inline std::vector<StampedPose2d> read_xytheta(std::istream& in, std::string_view name = "<stream>",
+                                               const ReaderLimits& limits = {}) {
   std::vector<StampedPose2d> trajectory;
-  detail::for_each_data_line(in, name, "xytheta", [&](const auto& tokens, const auto& fail) {
-    trajectory.push_back(detail::parse_xytheta(tokens, fail));
-  });
+  detail::for_each_data_line(in, name, "xytheta", limits,
+                             [&](const auto& tokens, const auto& fail) {
+                               trajectory.push_back(detail::parse_xytheta(tokens, fail));
+                             });
   return trajectory;
 }
 
 /// Reads an x-y-theta trajectory file (plain or gzip).
-inline std::vector<StampedPose2d> read_xytheta(const std::filesystem::path& path) {
+inline std::vector<StampedPose2d> read_xytheta(const std::filesystem::path& path,
+                                               const ReaderLimits& limits = {}) {
   std::vector<StampedPose2d> trajectory;
-  detail::for_each_data_line(path, "xytheta", [&](const auto& tokens, const auto& fail) {
+  detail::for_each_data_line(path, "xytheta", limits, [&](const auto& tokens, const auto& fail) {
     trajectory.push_back(detail::parse_xytheta(tokens, fail));
   });
   return trajectory;

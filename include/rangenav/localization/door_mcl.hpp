@@ -54,20 +54,21 @@ inline constexpr std::size_t max_tracked_doors = 16;
 
 /// One door's opening angle estimate in a particle: N(mean, variance), rad.
 struct DoorAngleEstimate {
-  double mean{0};
-  double variance{0};
+  double mean{0};      ///< rad, from the door's reference angle
+  double variance{0};  ///< rad^2
 };
 
 /// A particle's state: the pose and the door angle estimates (doors beyond the map's count are
 /// unused).
 struct DoorAwareState {
-  Pose2d pose{};
-  std::array<DoorAngleEstimate, max_tracked_doors> doors{};
+  Pose2d pose{};                                             ///< the robot's pose in the map frame
+  std::array<DoorAngleEstimate, max_tracked_doors> doors{};  ///< one estimate per door of the map
 };
 
+/// Parameters of door-aware MCL (paper 001 §IV).
 struct DoorAwareMclParams {
-  OdometryMotionParams motion{};
-  LikelihoodFieldParams field{};
+  OdometryMotionParams motion{};          ///< odometry motion model
+  LikelihoodFieldParams field{};          ///< the static map's sensor model
   double sigma_d{deg_to_rad(3.0)};        ///< door random walk per update (rad)
   double angle_sigma{deg_to_rad(3.0)};    ///< std. dev. of a measured door angle (rad)
   double dp_epsilon{0.03};                ///< Douglas-Peucker tolerance (m)
@@ -80,6 +81,7 @@ struct DoorAwareMclParams {
   /// the same as standard MCL's (§V.B compares both filters with the same parameters).
   MclParams sampling{};
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     motion.validate(where);
     field.validate(where);
@@ -98,10 +100,12 @@ struct DoorAwareMclParams {
 /// A scan prepared once for all particles: beam end points and the Douglas-Peucker segments,
 /// both in the robot frame.
 struct DoorAwareObservation {
-  std::vector<Eigen::Vector2f> end_points;
-  std::vector<std::pair<Point2d, Point2d>> segments;
+  std::vector<Eigen::Vector2f> end_points;            ///< end points of the used beams
+  std::vector<std::pair<Point2d, Point2d>> segments;  ///< the scan's Douglas-Peucker segments
 };
 
+/// Monte-Carlo localization with a Kalman-filtered opening angle per door in every particle
+/// (paper 001 §IV, Rao-Blackwellised over the door states).
 class DoorAwareMcl {
  public:
   /// `grid` is the static map with the doors removed (remove_doors()); `doors` the detected doors.
@@ -118,28 +122,28 @@ class DoorAwareMcl {
     build_cell_tables(grid);
   }
 
+  /// The parameters.
   [[nodiscard]] const DoorAwareMclParams& params() const { return params_; }
+  /// The doors the filter tracks.
   [[nodiscard]] const std::vector<DoorModel>& doors() const { return doors_; }
+  /// The particles.
   [[nodiscard]] const ParticleFilter<DoorAwareState>& filter() const { return filter_; }
+  /// The static map's likelihood field.
   [[nodiscard]] const LikelihoodFieldModel& field() const { return field_; }
 
   /// Poses from N(mean, diag(sigma^2)); each door's angle starts uniform over its observed range
-  /// (mean in the middle, variance range^2 / 12).
+  /// (mean in the middle, variance range^2 / 12). Throws invalid_argument as
+  /// MonteCarloLocalization::initialize_gaussian() does.
   template <class Engine>
   void initialize_gaussian(const Pose2d& mean, const Eigen::Vector3d& sigma, std::size_t count,
                            Engine& rng) {
     constexpr std::string_view where = "DoorAwareMcl::initialize_gaussian";
-    if (count == 0) detail::throw_invalid_argument(where, "count", count, "must be > 0");
-    if (!(sigma.allFinite() && (sigma.array() >= 0).all()))
-      detail::throw_invalid(where, "sigma must be finite and >= 0");
-    const auto draw = [&](double s) {
-      return s > 0 ? std::normal_distribution<double>(0.0, s)(rng) : 0.0;
-    };
+    detail::require_particle_count(where, "count", count);
+    const std::vector<Pose2d> poses = detail::sample_gaussian_poses(mean, sigma, count, rng, where);
     states_.resize(count);
-    for (auto& x : states_) {
-      x.pose = {mean.x + draw(sigma.x()), mean.y + draw(sigma.y()),
-                normalize_angle(mean.theta + draw(sigma.z()))};
-      init_doors(x);
+    for (std::size_t i = 0; i < count; ++i) {
+      states_[i].pose = poses[i];
+      init_doors(states_[i]);
     }
     filter_.reset(states_);
   }
@@ -159,12 +163,16 @@ class DoorAwareMcl {
   }
 
   /// Prepares a scan taken by a sensor at `sensor_pose` in the robot frame (buffers reused).
+  /// Throws invalid_argument for a non-finite sensor pose.
   template <class S>
   void prepare(const LaserScan<S>& scan, const Pose2d& sensor_pose,
                DoorAwareObservation& out) const {
     namespace bg = boost::geometry;
     using BgPoint = bg::model::d2::point_xy<double>;
     using Line = bg::model::linestring<BgPoint>;
+    detail::require_finite("DoorAwareMcl::prepare", "sensor_pose.x", sensor_pose.x);
+    detail::require_finite("DoorAwareMcl::prepare", "sensor_pose.y", sensor_pose.y);
+    detail::require_finite("DoorAwareMcl::prepare", "sensor_pose.theta", sensor_pose.theta);
     out.end_points.clear();
     out.segments.clear();
     const auto& valid = scan.valid_indices();
@@ -198,10 +206,12 @@ class DoorAwareMcl {
     flush();
   }
 
-  /// One step of §IV: sampling, importance (Eq. 5-6), door state update, resampling.
+  /// One step of §IV: sampling, importance (Eq. 5-6), door state update, resampling. Throws
+  /// invalid_argument before initialisation and for a non-finite odometry reading.
   template <class Engine>
   void update(const OdometryReading& u, const DoorAwareObservation& z, Engine& rng) {
     if (filter_.empty()) detail::throw_invalid("DoorAwareMcl::update", "not initialised");
+    OdometryMotionModel::validate(u, "DoorAwareMcl::update");
     const double var_d = params_.sigma_d * params_.sigma_d;
     for (auto& p : filter_.particles()) {
       p.state.pose = motion_.sample(p.state.pose, u, rng);
@@ -224,10 +234,12 @@ class DoorAwareMcl {
       filter_.resample(target, rng);
   }
 
+  /// Number of particles.
   [[nodiscard]] std::size_t particle_count() const { return filter_.size(); }
 
-  /// Weighted mean pose.
+  /// Weighted mean pose. Throws invalid_argument before initialisation.
   [[nodiscard]] Pose2d estimate() const {
+    if (filter_.empty()) detail::throw_invalid("DoorAwareMcl::estimate", "not initialised");
     double x = 0, y = 0, c = 0, s = 0;
     for (const auto& p : filter_.particles()) {
       x += p.weight * p.state.pose.x;
@@ -238,8 +250,10 @@ class DoorAwareMcl {
     return {x, y, std::atan2(s, c)};
   }
 
-  /// Weighted mean opening angle of door k (relative to its reference angle).
+  /// Weighted mean opening angle of door k (relative to its reference angle). Throws
+  /// invalid_argument before initialisation and for k >= doors().size().
   [[nodiscard]] double door_angle(std::size_t k) const {
+    require_door(k, "DoorAwareMcl::door_angle");
     double a = 0;
     for (const auto& p : filter_.particles())
       a += p.weight * p.state.doors[k].mean;
@@ -249,6 +263,7 @@ class DoorAwareMcl {
   /// Door k's opening angle over the particle set: the weighted mean of the particles' means and
   /// the variance of the mixture (mean of their variances plus the spread of their means).
   [[nodiscard]] DoorAngleEstimate door_estimate(std::size_t k) const {
+    require_door(k, "DoorAwareMcl::door_estimate");
     const double mean = door_angle(k);
     double var = 0;
     for (const auto& p : filter_.particles()) {
@@ -327,6 +342,13 @@ class DoorAwareMcl {
   }
 
  private:
+  void require_door(std::size_t k, std::string_view where) const {
+    if (filter_.empty()) detail::throw_invalid(where, "not initialised");
+    if (k >= doors_.size())
+      detail::throw_invalid_argument(where, "k", k,
+                                     "must be < doors().size() = " + std::to_string(doors_.size()));
+  }
+
   struct Weigher {
     const DoorAwareMcl* self;
     [[nodiscard]] double log_likelihood(const DoorAwareState& x,

@@ -13,18 +13,23 @@
 #include "rangenav/core/angles.hpp"
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
+#include "rangenav/localization/particle_filter.hpp"
 #include "rangenav/mapping/occupancy_grid.hpp"
 
 namespace rangenav {
 
 /// `count` poses uniform over the cells whose occupancy probability is below `free_probability`
 /// (uniform within each cell) with uniform headings. Throws invalid_argument, naming `where`,
-/// for count == 0 or a grid without a free cell.
+/// for a count outside [1, max_particle_count], a free_probability outside (0, 1] or a grid
+/// without a free cell.
 template <class Engine>
 [[nodiscard]] std::vector<Pose2d> sample_free_space_poses(
     const OccupancyGrid& grid, std::size_t count, Engine& rng, double free_probability = 0.25,
     std::string_view where = "sample_free_space_poses") {
-  if (count == 0) detail::throw_invalid_argument(where, "count", count, "must be > 0");
+  detail::require_particle_count(where, "count", count);
+  if (!(free_probability > 0 && free_probability <= 1))
+    detail::throw_invalid_argument(where, "free_probability", free_probability,
+                                   "must be in (0, 1]");
   const double l_free = log_odds(std::clamp(free_probability, 1e-6, 0.5));
   std::vector<OccupancyGrid::Index> free;
   for (int y = 0; y < grid.height(); ++y)

@@ -73,9 +73,14 @@ inline void squared_distance_1d(float* f, std::size_t n, std::size_t stride, std
 /// to the nearest set cell; +inf everywhere when no cell is set.
 [[nodiscard]] inline std::vector<float> squared_distance_transform(
     const std::vector<std::uint8_t>& mask, std::size_t width, std::size_t height) {
-  if (mask.size() != width * height)
-    detail::throw_invalid_argument("squared_distance_transform", "mask.size()", mask.size(),
-                                   "must equal width * height = " + std::to_string(width * height));
+  // width * height must not wrap around to mask.size().
+  const bool wraps = height != 0 && width > std::numeric_limits<std::size_t>::max() / height;
+  if (wraps || mask.size() != width * height)
+    detail::throw_invalid_argument(
+        "squared_distance_transform", "mask.size()", mask.size(),
+        "must equal width * height = " +
+            (wraps ? std::to_string(width) + " * " + std::to_string(height) + " (overflows)"
+                   : std::to_string(width * height)));
   std::vector<float> f(mask.size());
   for (std::size_t i = 0; i < mask.size(); ++i)
     f[i] = mask[i] ? 0.0f : std::numeric_limits<float>::infinity();
@@ -89,6 +94,7 @@ inline void squared_distance_1d(float* f, std::size_t n, std::size_t stride, std
   return f;
 }
 
+/// Parameters of the likelihood-field sensor model (Probabilistic Robotics §6.4; AMCL's defaults).
 struct LikelihoodFieldParams {
   double sigma_hit{0.2};       ///< std. deviation of the end point's distance (m)
   double z_hit{0.95};          ///< weight of the Gaussian
@@ -98,6 +104,7 @@ struct LikelihoodFieldParams {
   std::size_t beam_stride{1};  ///< use every beam_stride-th valid beam (>= 1)
   std::size_t max_beams{30};   ///< then at most this many, evenly spaced (0: no limit)
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     detail::require_positive(where, "sigma_hit", sigma_hit);
     detail::require_non_negative(where, "z_hit", z_hit);
@@ -131,12 +138,14 @@ void for_each_used_beam(std::size_t n, const LikelihoodFieldParams& params, F&& 
     f(stride * ((m * span + parts / 2) / parts));
 }
 
+/// The likelihood-field sensor model over an occupancy grid: log p per cell precomputed from an
+/// exact Euclidean distance transform, one lookup per beam end point.
 class LikelihoodFieldModel {
  public:
   /// A scan prepared once for scoring many particles: the end points of the used beams in the
   /// robot frame.
   struct Observation {
-    std::vector<Eigen::Vector2f> end_points;
+    std::vector<Eigen::Vector2f> end_points;  ///< robot frame
   };
 
   /// Precomputes the field of the grid's occupied cells (OccupancyGrid::is_occupied()).
@@ -164,6 +173,7 @@ class LikelihoodFieldModel {
     off_map_ = static_cast<float>(log_likelihood_of_distance(params_.max_distance));
   }
 
+  /// The parameters.
   [[nodiscard]] const LikelihoodFieldParams& params() const { return params_; }
 
   /// log p(z_j | d) for an end point at distance d from the nearest obstacle.
@@ -193,9 +203,12 @@ class LikelihoodFieldModel {
   }
 
   /// Prepares a scan taken by a sensor at `sensor_pose` in the robot frame into `out` (its buffer
-  /// is reused).
+  /// is reused). Throws invalid_argument for a non-finite sensor pose.
   template <class S>
   void prepare(const LaserScan<S>& scan, const Pose2d& sensor_pose, Observation& out) const {
+    detail::require_finite("LikelihoodFieldModel::prepare", "sensor_pose.x", sensor_pose.x);
+    detail::require_finite("LikelihoodFieldModel::prepare", "sensor_pose.y", sensor_pose.y);
+    detail::require_finite("LikelihoodFieldModel::prepare", "sensor_pose.theta", sensor_pose.theta);
     out.end_points.clear();
     const auto& valid = scan.valid_indices();
     for_each_used_beam(valid.size(), params_, [&](std::size_t k) {
@@ -204,6 +217,7 @@ class LikelihoodFieldModel {
           sensor_pose.transform_point(Point2d(double(q.x()), double(q.y()))).cast<float>());
     });
   }
+  /// As prepare(scan, sensor_pose, out), returning a new Observation.
   template <class S>
   [[nodiscard]] Observation prepare(const LaserScan<S>& scan,
                                     const Pose2d& sensor_pose = {}) const {

@@ -33,6 +33,7 @@
 
 namespace rangenav {
 
+/// Parameters of MonteCarloLocalization: particle counts, KLD-sampling and resampling.
 struct MclParams {
   std::size_t min_particles{500};           ///< KLD lower bound (>= 1)
   std::size_t max_particles{50000};         ///< KLD upper bound (>= min_particles)
@@ -43,12 +44,14 @@ struct MclParams {
   double bin_size_theta{deg_to_rad(10.0)};  ///< KLD histogram bin (rad)
   double resample_threshold{0.5};           ///< resample when N_eff < this * N, in (0, 1]
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     if (min_particles == 0)
       detail::throw_invalid_argument(where, "min_particles", min_particles, "must be >= 1");
     if (max_particles < min_particles)
       detail::throw_invalid_argument(where, "max_particles", max_particles,
                                      "must be >= min_particles = " + std::to_string(min_particles));
+    detail::require_particle_count(where, "max_particles", max_particles);
     detail::require_positive(where, "kld_epsilon", kld_epsilon);
     detail::require_finite(where, "kld_z", kld_z);
     detail::require_positive(where, "bin_size_xy", bin_size_xy);
@@ -58,6 +61,37 @@ struct MclParams {
                                      "must be in (0, 1]");
   }
 };
+
+namespace detail {
+/// `count` poses drawn from N(mean, diag(sigma^2)), headings normalised; the initialisation of
+/// both filters. Throws invalid_argument naming `where` for a non-finite mean, a negative or
+/// non-finite sigma, or a drawn pose that is not finite (mean and sigma too large).
+template <class Engine>
+[[nodiscard]] std::vector<Pose2d> sample_gaussian_poses(const Pose2d& mean,
+                                                        const Eigen::Vector3d& sigma,
+                                                        std::size_t count, Engine& rng,
+                                                        std::string_view where) {
+  require_finite(where, "mean.x", mean.x);
+  require_finite(where, "mean.y", mean.y);
+  require_finite(where, "mean.theta", mean.theta);
+  if (!(sigma.allFinite() && (sigma.array() >= 0).all()))
+    throw_invalid(where, "sigma must be finite and >= 0");
+  const auto draw = [&](double s) {
+    return s > 0 ? std::normal_distribution<double>(0.0, s)(rng) : 0.0;
+  };
+  std::vector<Pose2d> poses(count);
+  for (auto& x : poses) {
+    x.x = mean.x + draw(sigma.x());
+    x.y = mean.y + draw(sigma.y());
+    x.theta = normalize_angle(mean.theta + draw(sigma.z()));
+    if (!(std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.theta)))
+      throw_invalid(where,
+                    "a pose drawn from N(mean, sigma^2) is not finite: mean or sigma "
+                    "too large");
+  }
+  return poses;
+}
+}  // namespace detail
 
 /// KLD-sampling's particle count for k occupied bins (before clamping).
 [[nodiscard]] inline double kld_particle_bound(std::size_t k, double epsilon, double z) {
@@ -76,11 +110,19 @@ template <class State, class PoseOf>
                                              std::vector<std::pair<std::uint64_t, double>>& bins) {
   bins.clear();
   const double inv_xy = 1.0 / params.bin_size_xy, inv_th = 1.0 / params.bin_size_theta;
+  // The key keeps 21 bits per axis; saturating first keeps a far (or NaN) pose from overflowing
+  // the conversion (such a user motion model's particles share the edge bins).
+  const auto bin = [](double v) {
+    constexpr double bound = double(std::int64_t{1} << 40);
+    if (!(v > -bound)) return -(std::int64_t{1} << 40);
+    if (!(v < bound)) return std::int64_t{1} << 40;
+    return static_cast<std::int64_t>(std::floor(v));
+  };
   for (const auto& p : ps) {
     const Pose2d& x = pose_of(p);
-    const auto bx = static_cast<std::int64_t>(std::floor(x.x * inv_xy));
-    const auto by = static_cast<std::int64_t>(std::floor(x.y * inv_xy));
-    const auto bt = static_cast<std::int64_t>(std::floor(x.theta * inv_th));
+    const auto bx = bin(x.x * inv_xy);
+    const auto by = bin(x.y * inv_xy);
+    const auto bt = bin(x.theta * inv_th);
     const std::uint64_t key = (static_cast<std::uint64_t>(bx & 0x1FFFFF) << 42) |
                               (static_cast<std::uint64_t>(by & 0x1FFFFF) << 21) |
                               static_cast<std::uint64_t>(bt & 0x1FFFFF);
@@ -101,37 +143,37 @@ template <class State, class PoseOf>
                     params.max_particles);
 }
 
+/// Monte-Carlo localization (Probabilistic Robotics Table 8.2 with KLD-sampling, Table 8.4)
+/// over any MotionModel and SensorModel of a Pose2d.
 template <class Motion = OdometryMotionModel, class Sensor = LikelihoodFieldModel>
 class MonteCarloLocalization {
  public:
+  /// A filter with these models and parameters and no particles (initialize_* next).
   MonteCarloLocalization(Motion motion, Sensor sensor, const MclParams& params = {})
       : motion_(std::move(motion)), sensor_(std::move(sensor)), params_(params) {
     params_.validate("MonteCarloLocalization");
   }
 
+  /// The parameters.
   [[nodiscard]] const MclParams& params() const { return params_; }
+  /// The motion model.
   [[nodiscard]] const Motion& motion_model() const { return motion_; }
+  /// The sensor model (prepare observations with it).
   [[nodiscard]] const Sensor& sensor_model() const { return sensor_; }
+  /// The particles.
   [[nodiscard]] const ParticleFilter<Pose2d>& filter() const { return filter_; }
+  /// Number of particles.
   [[nodiscard]] std::size_t particle_count() const { return filter_.size(); }
 
-  /// Starts from `count` poses drawn from N(mean, diag(sigma^2)) (position tracking).
+  /// Starts from `count` poses drawn from N(mean, diag(sigma^2)) (position tracking). Throws
+  /// invalid_argument for count == 0, a non-finite mean, a negative or non-finite sigma, or a
+  /// mean and sigma so large that a drawn pose is not finite.
   template <class Engine>
   void initialize_gaussian(const Pose2d& mean, const Eigen::Vector3d& sigma, std::size_t count,
                            Engine& rng) {
     constexpr std::string_view where = "MonteCarloLocalization::initialize_gaussian";
-    if (count == 0) detail::throw_invalid_argument(where, "count", count, "must be > 0");
-    if (!(sigma.allFinite() && (sigma.array() >= 0).all()))
-      detail::throw_invalid(where, "sigma must be finite and >= 0");
-    states_.resize(count);
-    const auto draw = [&](double s) {
-      return s > 0 ? std::normal_distribution<double>(0.0, s)(rng) : 0.0;
-    };
-    for (auto& x : states_) {
-      x.x = mean.x + draw(sigma.x());
-      x.y = mean.y + draw(sigma.y());
-      x.theta = normalize_angle(mean.theta + draw(sigma.z()));
-    }
+    detail::require_particle_count(where, "count", count);
+    states_ = detail::sample_gaussian_poses(mean, sigma, count, rng, where);
     filter_.reset(states_);
   }
 
@@ -147,9 +189,13 @@ class MonteCarloLocalization {
 
   /// One filter step: motion by the odometry reading, weighting by the observation, adaptive
   /// low-variance resampling. Returns the log marginal likelihood of the observation.
+  /// Throws invalid_argument before initialisation and, for a motion model with a static
+  /// validate(u, where) (OdometryMotionModel's: finite readings), for a control it rejects.
   template <class Control, class Observation, class Engine>
   double update(const Control& u, const Observation& z, Engine& rng) {
-    if (filter_.empty()) detail::throw_invalid("MonteCarloLocalization::update", "not initialised");
+    constexpr std::string_view where = "MonteCarloLocalization::update";
+    if (filter_.empty()) detail::throw_invalid(where, "not initialised");
+    if constexpr (requires { Motion::validate(u, where); }) Motion::validate(u, where);
     filter_.predict(motion_, u, rng);
     const double log_marginal = filter_.update(sensor_, z);
     const std::size_t target = params_.adapt_particle_count ? kld_count() : filter_.size();
@@ -160,8 +206,11 @@ class MonteCarloLocalization {
     return log_marginal;
   }
 
-  /// Weighted mean pose (circular mean of the headings).
+  /// Weighted mean pose (circular mean of the headings). Throws invalid_argument before
+  /// initialisation.
   [[nodiscard]] Pose2d estimate() const {
+    if (filter_.empty())
+      detail::throw_invalid("MonteCarloLocalization::estimate", "not initialised");
     double x = 0, y = 0, c = 0, s = 0;
     for (const auto& p : filter_.particles()) {
       x += p.weight * p.state.x;
@@ -174,6 +223,8 @@ class MonteCarloLocalization {
 
   /// Weighted covariance of (x, y, theta) about estimate() (heading differences wrapped).
   [[nodiscard]] Eigen::Matrix3d covariance() const {
+    if (filter_.empty())
+      detail::throw_invalid("MonteCarloLocalization::covariance", "not initialised");
     const Pose2d m = estimate();
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
     for (const auto& p : filter_.particles()) {

@@ -22,16 +22,18 @@ namespace rangenav {
 
 /// Two successive odometry readings (the control u_t = (x̄_{t-1}, x̄_t) of Table 5.6).
 struct OdometryReading {
-  Pose2d previous{};
-  Pose2d current{};
+  Pose2d previous{};  ///< odometry pose at the previous update
+  Pose2d current{};   ///< odometry pose now
 };
 
+/// Noise parameters of the odometry motion model (Probabilistic Robotics Table 5.6).
 struct OdometryMotionParams {
   double alpha1{0.2};  ///< rotation noise from rotation (rad^2 / rad^2)
   double alpha2{0.2};  ///< rotation noise from translation (rad^2 / m^2)
   double alpha3{0.2};  ///< translation noise from translation (m^2 / m^2)
   double alpha4{0.2};  ///< translation noise from rotation (m^2 / rad^2)
 
+  /// Throws invalid_argument for a negative alpha.
   void validate(std::string_view where) const {
     detail::require_non_negative(where, "alpha1", alpha1);
     detail::require_non_negative(where, "alpha2", alpha2);
@@ -40,12 +42,33 @@ struct OdometryMotionParams {
   }
 };
 
+/// The odometry motion model (Probabilistic Robotics Table 5.6): rotation, translation,
+/// rotation, each with noise; models MotionModel for Pose2d and OdometryReading.
 class OdometryMotionModel {
  public:
+  /// A model with these noise parameters; throws invalid_argument for invalid ones.
   explicit OdometryMotionModel(const OdometryMotionParams& params = {}) : params_(params) {
     params_.validate("OdometryMotionModel");
   }
+  /// The parameters.
   [[nodiscard]] const OdometryMotionParams& params() const { return params_; }
+
+  /// Throws invalid_argument naming `where` unless both odometry poses are finite and so is the
+  /// increment between them. The filters call it once per update, before sample() runs in the
+  /// particle loop (which never throws): a NaN reading would otherwise turn every particle NaN.
+  static void validate(const OdometryReading& u, std::string_view where) {
+    const auto finite = [&](std::string_view name, double v) {
+      detail::require_finite(where, name, v);
+    };
+    finite("u.previous.x", u.previous.x);
+    finite("u.previous.y", u.previous.y);
+    finite("u.previous.theta", u.previous.theta);
+    finite("u.current.x", u.current.x);
+    finite("u.current.y", u.current.y);
+    finite("u.current.theta", u.current.theta);
+    if (!std::isfinite(std::hypot(u.current.x - u.previous.x, u.current.y - u.previous.y)))
+      detail::throw_invalid(where, "the odometry increment u.current - u.previous overflows");
+  }
 
   /// A pose drawn from p(x_t | u_t, x_{t-1}) (Table 5.6).
   template <class Engine>

@@ -18,6 +18,7 @@
 #include <limits>
 #include <random>
 #include <span>
+#include <string>
 #include <string_view>
 #include <utility>
 #include <vector>
@@ -36,16 +37,34 @@ concept SensorModel = requires(const S& s, const State& x, const Observation& z)
   { s.log_likelihood(x, z) } -> std::convertible_to<double>;
 };
 
+/// The most particles a filter holds (2^24): a count beyond it is a caller's error, answered
+/// before anything is allocated.
+inline constexpr std::size_t max_particle_count = std::size_t{1} << 24;
+
+namespace detail {
+/// Throws invalid_argument naming `where` unless 0 < count <= max_particle_count.
+inline void require_particle_count(std::string_view where, std::string_view name,
+                                   std::size_t count) {
+  if (count == 0) throw_invalid_argument(where, name, count, "must be > 0");
+  if (count > max_particle_count)
+    throw_invalid_argument(where, name, count,
+                           "must be <= max_particle_count = " + std::to_string(max_particle_count));
+}
+}  // namespace detail
+
+/// A weighted state.
 template <class State>
 struct Particle {
-  State state{};
+  State state{};         ///< the hypothesis
   double weight{0};      ///< normalised: the weights of a filter sum to 1
   double log_weight{0};  ///< log(weight)
 };
 
+/// A particle filter over any state type (see the file comment).
 template <class State>
 class ParticleFilter {
  public:
+  /// A particle of this filter.
   using particle_type = Particle<State>;
 
   ParticleFilter() = default;
@@ -55,15 +74,20 @@ class ParticleFilter {
   /// Replaces the particles by `states` with equal weights. Throws for an empty set.
   void reset(std::span<const State> states) {
     if (states.empty()) detail::throw_invalid("ParticleFilter::reset", "states is empty");
+    detail::require_particle_count("ParticleFilter::reset", "states.size()", states.size());
     particles_.resize(states.size());
     for (std::size_t i = 0; i < states.size(); ++i)
       particles_[i].state = states[i];
     set_uniform_weights();
   }
 
+  /// Number of particles.
   [[nodiscard]] std::size_t size() const { return particles_.size(); }
+  /// True when the filter has no particles.
   [[nodiscard]] bool empty() const { return particles_.empty(); }
+  /// The particles.
   [[nodiscard]] const std::vector<particle_type>& particles() const { return particles_; }
+  /// The particles, for a filter that edits them (weights must stay normalised).
   [[nodiscard]] std::vector<particle_type>& particles() { return particles_; }
 
   /// Moves every particle by the motion model (sampling step).
@@ -107,11 +131,10 @@ class ParticleFilter {
 
   /// Low-variance resampling (Probabilistic Robotics, Table 4.4) to `count` particles with
   /// equal weights: one random offset, then `count` evenly spaced pointers into the cumulative
-  /// weights. Throws for count == 0.
+  /// weights. Throws for count == 0 or count > max_particle_count.
   template <class Engine>
   void resample(std::size_t count, Engine& rng) {
-    if (count == 0)
-      detail::throw_invalid_argument("ParticleFilter::resample", "count", count, "must be > 0");
+    detail::require_particle_count("ParticleFilter::resample", "count", count);
     if (particles_.empty()) detail::throw_invalid("ParticleFilter::resample", "filter is empty");
     scratch_.resize(count);
     const double step = 1.0 / static_cast<double>(count);

@@ -43,14 +43,15 @@
 
 namespace rangenav {
 
+/// Parameters of door detection (paper 001 §III.B).
 struct DoorDetectionParams {
   double epsilon{0.1};                      ///< Eq. (1) clustering distance (m)
   double delta{0.3};                        ///< Eq. (2) minimal line length (m)
   double max_line_angle{deg_to_rad(10.0)};  ///< larger spread of candidate lines: no line
   double lambda_min{0.6};                   ///< door leaf length range (m)
-  double lambda_max{1.2};
-  std::size_t min_points{5};     ///< clusters with fewer points are ignored
-  double merge_tolerance{0.1};   ///< leaves with both end points this close are one (m)
+  double lambda_max{1.2};                   ///< upper end of the door leaf length range (m)
+  std::size_t min_points{5};                ///< clusters with fewer points are ignored
+  double merge_tolerance{0.1};              ///< leaves with both end points this close are one (m)
   double hinge_tolerance{0.3};   ///< leaves crossing this close to an end share a hinge (m)
   double length_tolerance{0.2};  ///< leaves of one door differ at most this much (m)
   double min_opening_difference{deg_to_rad(20.0)};  ///< "clearly different" opening angles
@@ -61,6 +62,7 @@ struct DoorDetectionParams {
   /// (opposite doors swung towards each other) are no door.
   double hinge_support_radius{0.15};
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     detail::require_positive(where, "epsilon", epsilon);
     detail::require_positive(where, "delta", delta);
@@ -80,21 +82,22 @@ struct DoorDetectionParams {
 
 /// A line object: the mean line segment of a cluster of dynamic points.
 struct LineObject {
-  Point2d a{0, 0};
-  Point2d b{0, 0};
+  Point2d a{0, 0};              ///< one end of the mean segment (map frame)
+  Point2d b{0, 0};              ///< the other end
   std::size_t points{0};        ///< cluster size
   std::size_t observations{1};  ///< times seen (merged)
+  /// |b - a| (m).
   [[nodiscard]] double length() const { return (b - a).norm(); }
 };
 
 /// A detected door (paper 001 §III).
 struct DoorModel {
-  Point2d hinge{0, 0};
+  Point2d hinge{0, 0};        ///< the hinge (map frame)
   double leaf_length{0};      ///< the longest reach of a supporting leaf from the hinge
   double reference_angle{0};  ///< global direction of the leaf at opening 0
   double opening_min{0};      ///< observed opening range relative to the reference, rad
-  double opening_max{0};
-  std::size_t leaves{0};  ///< leaves supporting the door
+  double opening_max{0};      ///< upper end of the observed opening range, rad
+  std::size_t leaves{0};      ///< leaves supporting the door
 
   /// The free end of the leaf at `opening` (relative to the reference angle).
   [[nodiscard]] Point2d leaf_end(double opening) const {
@@ -198,13 +201,19 @@ inline void remove_doors(OccupancyGrid& grid, std::span<const DoorModel> doors) 
   }
 }
 
+/// Finds doors in the dynamic points of classified scans: line objects of door length that
+/// turn about a common hinge (paper 001 §III.B).
 class DoorDetector {
  public:
+  /// A detector with these parameters; throws invalid_argument for invalid ones.
   explicit DoorDetector(const DoorDetectionParams& params = {}) : params_(params) {
     params_.validate("DoorDetector");
   }
+  /// The parameters.
   [[nodiscard]] const DoorDetectionParams& params() const { return params_; }
+  /// The line objects of door length found so far (potential door leaves).
   [[nodiscard]] const std::vector<LineObject>& potential_leaves() const { return leaves_; }
+  /// The doors detected so far.
   [[nodiscard]] const std::vector<DoorModel>& doors() const { return doors_; }
 
   /// Extracts the line objects of one set of dynamic points (steps 1-2) into `lines`.

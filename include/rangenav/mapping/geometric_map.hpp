@@ -57,7 +57,7 @@ enum class PlaneOffsetTest {
   /// of the other shape's plane. Translation-invariant; for parallel planes it is |d1 - d2| < t2.
   /// The default: measured in example 08 (640 x 480, 65 key frames, kitchen at x, y in [0, 5] x
   /// [0, 4]) it leaves each labelled plane one shape at every noise level where the origin test
-  /// left up to 5 pieces of the floor (sigma 0.02), see the README's geometric-map section.
+  /// left up to 5 pieces of the floor (sigma 0.02); see docs/mapping.md.
   centroid,
 };
 
@@ -87,15 +87,17 @@ template <class Scalar = double, class Clipper = BoostGeometryClipper>
 requires PolygonClipper<Clipper, Scalar>
 class GeometricMap {
  public:
+  /// The similarity parameters.
   using Parameters = GeometricMapParameters<Scalar>;
+  /// A 3D vector.
   using Vector3 = Point<3, Scalar>;
 
   /// One shape of the map: the plane, its frame and the polygon in that frame, and the merge
   /// weight delta of Eq. (7) (1 for a shape never merged).
   struct Shape {
-    std::size_t id{0};
-    PlanarPolygon<Scalar> surface;
-    Scalar delta{1};
+    std::size_t id{0};              ///< stable identifier (the older id survives a merge)
+    PlanarPolygon<Scalar> surface;  ///< plane, frame and polygon
+    Scalar delta{1};                ///< merge weight: the polygons merged into it
     /// The area centroid of the polygon (holes subtracted), in world coordinates.
     Vector3 centroid{Vector3::Zero()};
   };
@@ -109,7 +111,9 @@ class GeometricMap {
     detail::require_positive(where, "t2", parameters.t2);
   }
 
+  /// The similarity parameters.
   [[nodiscard]] const Parameters& parameters() const { return parameters_; }
+  /// The polygon clipper.
   [[nodiscard]] const Clipper& clipper() const { return clipper_; }
 
   /// The similarity test of Eq. (6) as the paper writes it: |n1 . n2| > t1 and |d1 - d2| < t2,
@@ -172,10 +176,14 @@ class GeometricMap {
 
   /// The shapes, ordered by increasing id.
   [[nodiscard]] const std::vector<Shape>& shapes() const { return shapes_; }
+  /// Number of shapes.
   [[nodiscard]] std::size_t size() const { return shapes_.size(); }
+  /// True when the map has no shapes.
   [[nodiscard]] bool empty() const { return shapes_.empty(); }
+  /// Removes every shape.
   void clear() { shapes_.clear(); }
 
+  /// True when a shape has this id.
   [[nodiscard]] bool contains(std::size_t id) const { return find(id) != shapes_.end(); }
 
   /// The shape with this id; throws invalid_argument when there is none.

@@ -45,6 +45,7 @@
 
 namespace rangenav {
 
+/// Parameters of GeometricMapper: paper 004's pipeline from key frames to the geometric map.
 struct GeometricMapperParams {
   /// Key-frame selection on the pose guess ("only ... if the robot moved to a certain extent").
   KeyFrameParams<double> key_frames{};
@@ -95,7 +96,7 @@ struct GeometricMapperParams {
   /// while the pose still moves by centimetres, run on every k-th of the frame's voxel
   /// centroids (about 600 of them), then all centroids to convergence: on the
   /// bench_geometric_map key frame (3,781 centroids) 6,494 instead of 14,262 correspondence
-  /// searches, the same pose error (benchmarks/README.md, "Registration, fourth pass").
+  /// searches, the same pose error.
   /// registration_icp() turns it off above 1 cm of range noise.
   IcpParams<double> icp = [] {
     IcpParams<double> p;
@@ -116,7 +117,7 @@ struct GeometricMapperParams {
   }
   /// Pair distance threshold of the ICP, decaying per iteration from initial to final (m).
   double initial_match_distance = 0.3;
-  double final_match_distance = 0.08;
+  double final_match_distance = 0.08;  ///< m, the threshold's final value
   /// Fitness rejection: a frame whose ICP fitness (matched / data points) is below this, or
   /// whose ICP found too few pairs, is not used (the IncrementalMapper's default).
   double min_fitness = 0.3;
@@ -126,12 +127,14 @@ struct GeometricMapperParams {
   /// Cluster an organised frame over image neighbours (see extract_planes); false: always with
   /// the kd-tree's radius queries.
   bool organized_clustering = true;
+  /// Euclidean clustering before plane extraction (paper 004 §3.2).
   EuclideanClusteringParams clustering{0.05, 500, std::numeric_limits<std::size_t>::max()};
-  PlaneExtractionParams planes{};
+  PlaneExtractionParams planes{};  ///< RANSAC planes and their hulls
   /// Aggregation: the similarity thresholds t1, t2 of Eq. (6) and where Eq. (6b) compares the
   /// offsets (at the shapes' centroids by default, at the world origin as in the paper).
   GeometricMapParameters<double> merging{};
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     key_frames.validate();
     detail::require_positive(where, "params.voxel_leaf", voxel_leaf);
@@ -157,9 +160,9 @@ struct GeometricFrameReport {
   bool registered = false;  ///< aligned (or the first frame) and passed the fitness test
   Transform3d pose = Transform3d::Identity();  ///< sensor -> world after registration
   std::optional<IcpResult<3, double>> icp;     ///< the alignment (none for the first frame)
-  std::size_t downsampled_points = 0;
-  std::size_t extraction_points = 0;  ///< finite points the plane extraction saw
-  std::size_t clusters = 0;
+  std::size_t downsampled_points = 0;  ///< points the registration saw after the voxel filter
+  std::size_t extraction_points = 0;   ///< finite points the plane extraction saw
+  std::size_t clusters = 0;            ///< clusters the plane extraction ran on
   std::vector<ExtractedPlane> planes;  ///< in world coordinates
   std::size_t merged = 0;              ///< planes merged into existing map shapes
 };
@@ -168,11 +171,13 @@ struct GeometricFrameReport {
 /// point map; one object per sequence and thread.
 class GeometricMapper {
  public:
+  /// The frustum rejector of the registration.
   using Rejector = FrustumRejector<3, double>;
   /// Point-to-plane ICP against the point map's normals (see the file comment).
   using IcpType =
       BasicIcp<3, double, PointToPlaneSolver<3, double>, DecayingDistanceRejector<double>, Rejector>;
 
+  /// A mapper with these parameters; throws invalid_argument for invalid ones.
   explicit GeometricMapper(const GeometricMapperParams& params = {})
       : params_(validated(params)),
         selector_(params_.key_frames),
@@ -188,6 +193,7 @@ class GeometricMapper {
     icp.rejector<Rejector>() = Rejector(f, Rejector::Mode::model_in_data_frustum);
   }
 
+  /// The parameters.
   [[nodiscard]] const GeometricMapperParams& params() const { return params_; }
   /// The point map, in the frame of the first key frame's odometry pose, map_origin().
   [[nodiscard]] const SparsePointMap<3, double>& point_map() const { return registration_.map(); }
@@ -195,6 +201,7 @@ class GeometricMapper {
   [[nodiscard]] Transform3d map_origin() const { return origin_.value_or(Transform3d::Identity()); }
   /// The geometric map (the editing API of GeometricMap works on it).
   [[nodiscard]] const GeometricMap<double>& map() const { return map_; }
+  /// The geometric map, for editing.
   [[nodiscard]] GeometricMap<double>& map() { return map_; }
   /// Key frames registered so far.
   [[nodiscard]] std::size_t key_frames() const { return key_frames_; }

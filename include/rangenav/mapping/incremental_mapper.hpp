@@ -38,6 +38,7 @@
 #include "rangenav/core/types.hpp"
 #include "rangenav/geometry/voxel_grid.hpp"
 #include "rangenav/mapping/key_frame.hpp"
+#include "rangenav/mapping/pose_uncertainty.hpp"
 #include "rangenav/mapping/sparse_point_map.hpp"
 #include "rangenav/registration/icp.hpp"
 #include "rangenav/registration/point_to_line_solver.hpp"
@@ -79,6 +80,22 @@ struct IncrementalMapperParams {
   /// differs from the odometry guess by more than this, both are tried (m, rad).
   Scalar hypothesis_distance = Scalar(0.1);
   Scalar hypothesis_angle = Scalar(5) * std::numbers::pi_v<Scalar> / 180;
+  /// The odometry's noise model. When set, every accepted registration is fused with the
+  /// odometry prediction by information (pose_uncertainty.hpp's fuse()): along the directions
+  /// the scan does not constrain (a corridor's axis) the odometry carries the pose; and every
+  /// update reports the pose's information (MapperUpdate::information).
+  std::optional<OdometryNoise<Scalar>> odometry_noise{};
+  /// With odometry_noise: complete the registration by the odometry along the directions the
+  /// scan constrains less than the odometry does (pose_uncertainty.hpp's complete()). false:
+  /// the noise model only sets the reported information.
+  bool fuse_odometry = true;
+  /// σ floor of the point-to-plane residuals in the registration's information (m): the range
+  /// noise of the sensor (about 1 cm for the SICK / Hokuyo class of laser scanners).
+  Scalar sensor_sigma = Scalar(0.01);
+  /// The odometry prediction is not fused when it disagrees with the registration beyond this
+  /// χ² (summed covariances; default the 99.9 % quantile for 3 DOF, 16.27; 22.46 suits 6 DOF):
+  /// odometry that froze and jumped is then not averaged into a good match.
+  Scalar odometry_gate_chi2 = Scalar(16.27);
 
   void validate() const {
     key_frames.validate();
@@ -92,6 +109,9 @@ struct IncrementalMapperParams {
     if (initial_match_distance)
       detail::require_positive("IncrementalMapperParams", "initial_match_distance",
                                *initial_match_distance);
+    if (odometry_noise) odometry_noise->validate();
+    detail::require_positive("IncrementalMapperParams", "sensor_sigma", sensor_sigma);
+    detail::require_positive("IncrementalMapperParams", "odometry_gate_chi2", odometry_gate_chi2);
   }
 };
 
@@ -106,6 +126,12 @@ struct MapperUpdate {
   bool registration_accepted = false;       ///< false: the pose is the odometry guess
   bool key_frame = false;                   ///< the scan was inserted into the map
   SparseInsertStats inserted{};
+  /// With IncrementalMapperParams::odometry_noise: the information of `pose` relative to the
+  /// map (body-frame perturbation, pose_uncertainty.hpp): the registration's fused with the
+  /// odometry's, or the odometry's alone when the registration was rejected or there was none.
+  std::optional<lie::PoseMatrix<D, Scalar>> information;
+  /// The odometry prediction was fused into the pose (it passed the χ² gate).
+  bool odometry_fused = false;
 };
 
 /// `Index` is the map's search structure (SparsePointMap's third parameter).
@@ -147,11 +173,21 @@ class IncrementalMapper {
       detail::throw_invalid(where, "argument 'odometry' is not a finite rigid transform");
     MapperUpdate<D, Scalar> update;
     transform_type guess = pose_;
-    if (odometry && last_odometry_)
-      guess = pose_ * (last_odometry_->inverse(Eigen::Isometry) * *odometry);
+    transform_type increment = transform_type::Identity();
+    if (odometry && last_odometry_) {
+      increment = last_odometry_->inverse(Eigen::Isometry) * *odometry;
+      guess = pose_ * increment;
+    }
     if (odometry) last_odometry_ = *odometry;
     update.initial_guess = guess;
     update.pose = guess;
+    // The odometry prediction's information (no odometry: a zero increment, the same model).
+    std::optional<lie::PoseMatrix<D, Scalar>> odometry_information;
+    if (params.odometry_noise) {
+      odometry_information =
+          params.odometry_noise->template covariance<D>(increment).inverse().eval();
+      update.information = odometry_information;
+    }
 
     if (params.voxel_size > Scalar(0)) {
       const auto filtered =
@@ -201,6 +237,14 @@ class IncrementalMapper {
       ++scans_;
       return update;
     }
+    // Odometry that froze and then jumps (real logs have both) claims a motion the constant-
+    // velocity prediction contradicts; such an increment is not fused (below).
+    bool odometry_consistent = true;
+    if (last_motion_) {
+      const transform_type diff = guess.inverse(Eigen::Isometry) * (pose_ * *last_motion_);
+      odometry_consistent = diff.translation().norm() <= params.hypothesis_distance &&
+                            std::abs(rotation_angle(diff)) <= params.hypothesis_angle;
+    }
     if (params.match_previous_scan) {
       if (previous_.size() >= std::size_t(10)) {
         const KdTree<D, Scalar> previous_tree(previous_);
@@ -230,19 +274,51 @@ class IncrementalMapper {
     }
     if constexpr (uses_normals) icp.solver.model_normals = map_.normals();
     update.icp = icp.align(map_.search(), finite_, guess);
+    const auto usable = [&](const IcpResult<D, Scalar>& result) {
+      return (result.reason == IcpTermination::converged ||
+              result.reason == IcpTermination::max_iterations ||
+              (result.reason == IcpTermination::degenerate && params.accept_degenerate &&
+               result.smallest_eigenvalue.has_value())) &&
+             result.fitness >= params.min_fitness;
+    };
+    {
+      const auto& r = *update.icp;
+      const transform_type correction = guess.inverse(Eigen::Isometry) * r.transform;
+      const bool plausible = correction.translation().norm() <= params.max_correction_distance &&
+                             std::abs(rotation_angle(correction)) <= params.max_correction_angle;
+      update.registration_accepted = usable(r) && plausible;
+    }
     const auto& r = *update.icp;
-    const bool usable = r.reason == IcpTermination::converged ||
-                        r.reason == IcpTermination::max_iterations ||
-                        (r.reason == IcpTermination::degenerate && params.accept_degenerate &&
-                         r.smallest_eigenvalue.has_value());
-    const transform_type correction = guess.inverse(Eigen::Isometry) * r.transform;
-    const bool plausible = correction.translation().norm() <= params.max_correction_distance &&
-                           std::abs(rotation_angle(correction)) <= params.max_correction_angle;
-    update.registration_accepted = usable && plausible && r.fitness >= params.min_fitness;
-    if (update.registration_accepted)
+    if (update.registration_accepted) {
       update.pose = r.transform;
-    else if (update.previous_scan_guess)
+      if (odometry_information) {
+        const lie::PoseMatrix<D, Scalar> info = information_of(r.transform);
+        const auto fused =
+            complete<D, Scalar>(r.transform, info, update.initial_guess, *odometry_information);
+        // The information is the sum either way: along what the scan leaves free, the pose is
+        // no better known than the odometry says.
+        update.information = fused.information;
+        if (fused.chi2 <= params.odometry_gate_chi2) {
+          if (params.fuse_odometry && odometry_consistent) {
+            update.pose = fused.pose;
+            update.odometry_fused = true;
+          }
+        } else {
+          // The registration and the odometry disagree, and one of them is wrong (a local
+          // minimum of ICP after a large motion, or odometry that froze): the pose is the
+          // registration's, and its covariance spans the disagreement e (Σ + e eᵀ, the spread
+          // of the two hypotheses), so that the pose graph and the loop search allow for it.
+          const lie::PoseTangent<D, Scalar> e =
+              lie::se_log<D, Scalar>(r.transform.inverse(Eigen::Isometry) * update.initial_guess);
+          const lie::PoseMatrix<D, Scalar> cov =
+              fused.information.ldlt().solve(lie::PoseMatrix<D, Scalar>::Identity()) +
+              e * e.transpose();
+          if (cov.allFinite()) update.information = cov.inverse().eval();
+        }
+      }
+    } else if (update.previous_scan_guess) {
       update.pose = *update.previous_scan_guess;
+    }
     last_motion_ = pose_.inverse(Eigen::Isometry) * update.pose;
     pose_ = update.pose;
     if (params.match_previous_scan) {
@@ -261,8 +337,65 @@ class IncrementalMapper {
   [[nodiscard]] const SparsePointMap<D, Scalar, Index>& map() const { return map_; }
   [[nodiscard]] const transform_type& pose() const { return pose_; }
   [[nodiscard]] std::size_t scans_processed() const { return scans_; }
+  /// The finite (voxel-filtered, with voxel_size) points of the last scan, in the robot frame:
+  /// what a key frame inserts into the map.
+  [[nodiscard]] const std::vector<point_type>& last_points() const { return finite_; }
+
+  /// Empties the map (the next scan is matched against what add_to_map() puts back; with an
+  /// empty map the next scan starts a new one). The pose and the odometry are kept.
+  void clear_map() {
+    map_ = map_type(with_normals(params.map));
+    key_frames_ = KeyFrameSelector<D, Scalar>(params.key_frames);
+  }
+  /// Inserts `cloud` (robot frame) at `pose` into the map by Eq. (5), as a key frame would be.
+  template <PointCloudOf<D> C>
+  SparseInsertStats add_to_map(const C& cloud, const transform_type& pose) {
+    const auto stats = map_.insert(cloud, pose);
+    key_frames_.accept(pose);
+    return stats;
+  }
+  /// Moves the map frame: the current pose becomes `pose` and what the mapper remembers in the
+  /// map frame (the previous scan) moves with it. For a SLAM back end that re-anchors the
+  /// trajectory after optimising it (call clear_map() / add_to_map() to move the map too).
+  void set_pose(const transform_type& pose) {
+    if (!is_rigid(pose, Scalar(std::is_same_v<Scalar, float> ? 1e-3 : 1e-6)))
+      detail::throw_invalid("IncrementalMapper::set_pose",
+                            "argument 'pose' is not a finite rigid transform");
+    const transform_type correction = pose * pose_.inverse(Eigen::Isometry);
+    for (auto& p : previous_)
+      p = correction * p;
+    pose_ = pose;
+  }
 
  private:
+  // The registration's information from the map ICP's final pairs and the map's normals (PCA
+  // of the map's nearest points when the map keeps none).
+  lie::PoseMatrix<D, Scalar> information_of(const transform_type& transform) {
+    if constexpr (requires { icp.correspondences(); }) {
+      const auto pairs = icp.correspondences();
+      if constexpr (uses_normals) {
+        const auto& normals = map_.normals();
+        return registration_information<D, Scalar>(
+            pairs, transform,
+            [&](const Correspondence<D, Scalar>& c) {
+              return c.model_index < normals.size() ? normals[c.model_index]
+                                                    : point_type::Zero().eval();
+            },
+            params.sensor_sigma);
+      } else {
+        const std::size_t k = D == 2 ? 5 : 10;
+        return registration_information<D, Scalar>(
+            pairs, transform,
+            [&](const Correspondence<D, Scalar>& c) {
+              return pca_normal<D, Scalar>(map_.search(), c.model, k, knn_);
+            },
+            params.sensor_sigma);
+      }
+    } else {
+      return lie::PoseMatrix<D, Scalar>::Zero();
+    }
+  }
+
   static SparsePointMapParams<Scalar> with_normals(SparsePointMapParams<Scalar> p) {
     if constexpr (uses_normals) p.normals = true;
     return p;
@@ -278,6 +411,7 @@ class IncrementalMapper {
   std::vector<std::uint32_t> hints_;           ///< map point near each of finite_ (the ICP's)
   std::vector<point_type> previous_;           ///< the previous scan in the map frame
   std::optional<transform_type> last_motion_;  ///< pose change of the last scan
+  std::vector<Neighbor<Scalar>> knn_;          ///< scratch of information_of()
 };
 
 /// The map ICP of the 2D laser setup: point-to-line against the map's normals, decaying

@@ -36,6 +36,12 @@
 //
 // Cells are square, `resolution` metres wide; cell (0, 0) has its lower-left corner at `origin`;
 // x grows along columns (index ix in [0, width)), y along rows (iy in [0, height)).
+//
+// Bad input is answered at the boundary: a non-finite pose, a box or origin whose extent
+// overflows, a cell outside the grid given to an accessor raise invalid_argument. Points far off
+// the grid (or NaN) map to cells far outside it, never to an overflowed index, and rays are
+// clipped to the grid and a border as wide as the grid, so a reading of any length costs at most
+// a few grid widths.
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
@@ -43,7 +49,9 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "rangenav/core/error.hpp"
@@ -83,6 +91,7 @@ struct OccupancyGridParams {
   /// misaligned pass turns transient and its later readings would be discarded as dynamic.
   bool classify_dynamic{true};
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     detail::require_positive(where, "resolution", resolution);
     const auto open_interval = [&](std::string_view name, double v, double lo, double hi) {
@@ -115,6 +124,7 @@ struct ScanClassification {
   /// dynamic points of §III).
   std::vector<Point2d> vanished_points;
 
+  /// Empties every list (a reused classification allocates nothing).
   void clear() {
     static_beams.clear();
     dynamic_beams.clear();
@@ -123,9 +133,17 @@ struct ScanClassification {
   }
 };
 
+/// A log-odds occupancy grid mapped with known poses, with paper 001's transient and
+/// seen-occupied cells and the classification of dynamic readings (§III).
 class OccupancyGrid {
  public:
+  /// A cell (x, y).
   using Index = Eigen::Vector2i;
+  /// The largest width or height of a grid (cells).
+  static constexpr std::size_t max_side = std::size_t{1} << 15;
+  /// The most cells of a grid: 2^27, about 2.3 GB of cell state (6.7 x 6.7 km at 0.5 m,
+  /// 580 x 580 m at 5 cm).
+  static constexpr std::size_t max_cells = std::size_t{1} << 27;
 
   /// A grid of width x height cells whose cell (0, 0) has its lower-left corner at `origin`;
   /// every cell starts unknown (probability 0.5).
@@ -135,11 +153,20 @@ class OccupancyGrid {
     constexpr std::string_view where = "OccupancyGrid";
     params_.validate(where);
     if (!origin.allFinite()) detail::throw_invalid(where, "origin must be finite");
-    constexpr std::size_t max_side = 1u << 15;
     if (width == 0 || width > max_side)
       detail::throw_invalid_argument(where, "width", width, "must be in [1, 32768]");
     if (height == 0 || height > max_side)
       detail::throw_invalid_argument(where, "height", height, "must be in [1, 32768]");
+    if (width * height > max_cells)
+      detail::throw_invalid_argument(where, "width * height", width * height,
+                                     "must be <= " + std::to_string(max_cells) + " cells");
+    const Point2d far_corner =
+        origin +
+        Point2d(static_cast<double>(width), static_cast<double>(height)) * params_.resolution;
+    if (!far_corner.allFinite())
+      detail::throw_invalid(where,
+                            "origin + size * resolution overflows (origin or resolution "
+                            "too large)");
     width_ = static_cast<int>(width);
     height_ = static_cast<int>(height);
     inv_resolution_ = 1.0 / params_.resolution;
@@ -166,27 +193,43 @@ class OccupancyGrid {
     if (!lo.allFinite() || !hi.allFinite() || (hi.array() < lo.array()).any())
       detail::throw_invalid(where, "the box [lo, hi] must be finite with lo <= hi");
     const Point2d a = lo - Point2d::Constant(margin), b = hi + Point2d::Constant(margin);
-    const auto cells = [&](double extent) {
-      return static_cast<std::size_t>(std::ceil(extent / params.resolution)) + 1;
+    // Counted in double and checked before the conversion: a box of +-1e300 m overflows.
+    const auto cells = [&](double extent, std::string_view axis) {
+      const double n = std::ceil(extent / params.resolution) + 1;
+      if (!(n <= double(max_side)))
+        detail::throw_invalid_argument(
+            where, std::string(axis) + " extent of [lo, hi] + margin", extent,
+            "m needs more than " + std::to_string(max_side) + " cells of " +
+                detail::format_value(params.resolution) + " m");
+      return static_cast<std::size_t>(n);
     };
-    return OccupancyGrid(a, cells(b.x() - a.x()), cells(b.y() - a.y()), params);
+    return OccupancyGrid(a, cells(b.x() - a.x(), "x"), cells(b.y() - a.y(), "y"), params);
   }
 
   // ---- geometry ------------------------------------------------------------------------------
+  /// The parameters.
   [[nodiscard]] const OccupancyGridParams& params() const { return params_; }
+  /// Cells along x.
   [[nodiscard]] int width() const { return width_; }
+  /// Cells along y.
   [[nodiscard]] int height() const { return height_; }
+  /// width x height.
   [[nodiscard]] std::size_t cell_count() const { return log_odds_.size(); }
+  /// Cell edge (m).
   [[nodiscard]] double resolution() const { return params_.resolution; }
+  /// The lower-left corner of cell (0, 0) (m).
   [[nodiscard]] const Point2d& origin() const { return origin_; }
+  /// True when the cell lies inside the grid.
   [[nodiscard]] bool contains(const Index& c) const {
     return c.x() >= 0 && c.y() >= 0 && c.x() < width_ && c.y() < height_;
   }
-  /// The cell containing p (it may lie outside the grid; check with contains()).
+  /// The cell containing p (it may lie outside the grid; check with contains()). Coordinates
+  /// more than 2^30 cells away, and NaN, give a cell at +-2^30: outside, never an overflow.
   [[nodiscard]] Index cell_of(const Point2d& p) const {
-    return {static_cast<int>(std::floor((p.x() - origin_.x()) * inv_resolution_)),
-            static_cast<int>(std::floor((p.y() - origin_.y()) * inv_resolution_))};
+    return {to_index((p.x() - origin_.x()) * inv_resolution_),
+            to_index((p.y() - origin_.y()) * inv_resolution_)};
   }
+  /// The centre of a cell (m).
   [[nodiscard]] Point2d cell_center(const Index& c) const {
     return origin_ + (c.cast<double>() + Point2d::Constant(0.5)) * params_.resolution;
   }
@@ -197,23 +240,32 @@ class OccupancyGrid {
   }
 
   // ---- cell state ----------------------------------------------------------------------------
-  [[nodiscard]] double log_odds_at(const Index& c) const { return log_odds_[linear(c)]; }
+  // Every accessor taking a cell throws invalid_argument for a cell outside the grid.
+  /// The cell's log odds log(p / (1 - p)); 0 = unknown.
+  [[nodiscard]] double log_odds_at(const Index& c) const {
+    return log_odds_[checked(c, "OccupancyGrid::log_odds_at")];
+  }
+  /// The cell's occupancy probability.
   [[nodiscard]] double probability(const Index& c) const {
     return probability_from_log_odds(log_odds_at(c));
   }
+  /// Occupied: probability above OccupancyGridParams::occupied_probability.
   [[nodiscard]] bool is_occupied(const Index& c) const { return log_odds_at(c) > l_occupied_; }
   /// Observed and leaning free (probability below 0.5).
   [[nodiscard]] bool is_free(const Index& c) const { return log_odds_at(c) < 0; }
+  /// Never observed (log odds exactly 0).
   [[nodiscard]] bool is_unknown(const Index& c) const { return log_odds_at(c) == 0; }
+  /// Was free with high likelihood in a free neighbourhood (paper 001 §III).
   [[nodiscard]] bool is_transient(const Index& c) const {
-    return (flags_[linear(c)] & transient_flag) != 0;
+    return (flags_[checked(c, "OccupancyGrid::is_transient")] & transient_flag) != 0;
   }
+  /// Was occupied with high likelihood (paper 001 §III).
   [[nodiscard]] bool is_seen_occupied(const Index& c) const {
-    return (flags_[linear(c)] & seen_occupied_flag) != 0;
+    return (flags_[checked(c, "OccupancyGrid::is_seen_occupied")] & seen_occupied_flag) != 0;
   }
   /// Mean of the beam end points that hit the cell (its centre when none did).
   [[nodiscard]] Point2d mean_hit_point(const Index& c) const {
-    const std::size_t i = linear(c);
+    const std::size_t i = checked(c, "OccupancyGrid::mean_hit_point");
     if (hit_count_[i] == 0) return cell_center(c);
     return (hit_sum_[i] / static_cast<float>(hit_count_[i])).cast<double>();
   }
@@ -223,24 +275,31 @@ class OccupancyGrid {
   /// Sets a cell back to unknown and clears its attributes (e.g. a detected door's cells, which
   /// paper 001 §III removes from the static grid).
   void clear_cell(const Index& c) {
-    const std::size_t i = linear(c);
+    const std::size_t i = checked(c, "OccupancyGrid::clear_cell");
     log_odds_[i] = 0;
     flags_[i] = 0;
     hit_sum_[i].setZero();
     hit_count_[i] = 0;
   }
-  /// Forces a cell's log-odds (clamped), e.g. to mark it free.
+  /// Forces a cell's log-odds (clamped; +-inf clamp too, NaN is rejected), e.g. to mark it free.
   void set_log_odds(const Index& c, double l) {
-    log_odds_[linear(c)] = static_cast<float>(std::clamp(l, l_min_, l_max_));
+    const std::size_t i = checked(c, "OccupancyGrid::set_log_odds");
+    if (std::isnan(l))
+      detail::throw_invalid_argument("OccupancyGrid::set_log_odds", "l", l, "must not be NaN");
+    log_odds_[i] = static_cast<float>(std::clamp(l, l_min_, l_max_));
   }
 
   // ---- ray tracing ---------------------------------------------------------------------------
   /// Calls f(cell) for every cell the segment a-b passes through, in order from a's cell to b's
   /// cell inclusive, 4-connected (Amanatides & Woo's voxel traversal); cells may lie outside the
   /// grid. The number of cells is |dx| + |dy| + 1 for the cell offsets dx, dy between the ends.
+  /// Only the part of the segment within the grid and a border as wide as the grid's larger side
+  /// is traversed (the segment is clipped there, Liang-Barsky), so the cost is bounded for a
+  /// segment of any length; a segment with a non-finite end visits nothing.
   template <class F>
   void trace(const Point2d& a, const Point2d& b, F&& f) const {
-    const Point2d ga = (a - origin_) * inv_resolution_, gb = (b - origin_) * inv_resolution_;
+    Point2d ga = (a - origin_) * inv_resolution_, gb = (b - origin_) * inv_resolution_;
+    if (!clip_to_border(ga, gb)) return;
     Index c(static_cast<int>(std::floor(ga.x())), static_cast<int>(std::floor(ga.y())));
     const Index end(static_cast<int>(std::floor(gb.x())), static_cast<int>(std::floor(gb.y())));
     const Point2d d = gb - ga;
@@ -272,8 +331,13 @@ class OccupancyGrid {
   /// Classifies the scan's readings taken from `sensor_pose` (the laser's pose in the map frame)
   /// into static and dynamic, maps the static ones, and reports the seen-occupied cells that
   /// turned free. `out` is cleared first; its buffers are reused.
+  /// Throws invalid_argument for a non-finite sensor pose.
   template <class S>
   void integrate(const Pose2d& sensor_pose, const LaserScan<S>& scan, ScanClassification& out) {
+    constexpr std::string_view where = "OccupancyGrid::integrate";
+    detail::require_finite(where, "sensor_pose.x", sensor_pose.x);
+    detail::require_finite(where, "sensor_pose.y", sensor_pose.y);
+    detail::require_finite(where, "sensor_pose.theta", sensor_pose.theta);
     out.clear();
     const Point2d origin = sensor_pose.position();
     const double c = std::cos(sensor_pose.theta), s = std::sin(sensor_pose.theta);
@@ -368,6 +432,57 @@ class OccupancyGrid {
 
  private:
   static constexpr std::uint8_t transient_flag = 1, seen_occupied_flag = 2, vanished_flag = 4;
+
+  /// A grid coordinate (in cells) as an index, saturated at +-2^30 (NaN: -2^30).
+  static int to_index(double g) {
+    constexpr double bound = double(1 << 30);
+    if (!(g > -bound)) return -(1 << 30);
+    if (!(g < bound)) return 1 << 30;
+    return static_cast<int>(std::floor(g));
+  }
+
+  /// The linear index of c, or invalid_argument naming `where` when c lies outside the grid.
+  std::size_t checked(const Index& c, std::string_view where) const {
+    if (!contains(c))
+      detail::throw_invalid(where, "cell (" + std::to_string(c.x()) + ", " + std::to_string(c.y()) +
+                                       ") is outside the " + std::to_string(width_) + " x " +
+                                       std::to_string(height_) + " grid");
+    return linear(c);
+  }
+
+  /// Clips the segment ga-gb (grid coordinates) to the grid grown by a border of its larger side
+  /// (Liang-Barsky); false when nothing of it is left or an end is not finite.
+  bool clip_to_border(Point2d& ga, Point2d& gb) const {
+    if (!ga.allFinite() || !gb.allFinite()) return false;
+    const double border = std::max(width_, height_);
+    const Point2d lo = Point2d::Constant(-border);
+    const Point2d hi(width_ + border, height_ + border);
+    if ((ga.array() >= lo.array()).all() && (ga.array() <= hi.array()).all() &&
+        (gb.array() >= lo.array()).all() && (gb.array() <= hi.array()).all())
+      return true;  // the common case: nothing to clip
+    const Point2d d = gb - ga;
+    double t0 = 0, t1 = 1;
+    for (int k = 0; k < 2; ++k) {
+      // Inside along axis k: lo <= ga + t d <= hi.
+      for (const auto& [p, q] : {std::pair{-d[k], ga[k] - lo[k]}, std::pair{d[k], hi[k] - ga[k]}}) {
+        if (p == 0) {
+          if (q < 0) return false;
+          continue;
+        }
+        const double t = q / p;
+        if (p < 0)
+          t0 = std::max(t0, t);
+        else
+          t1 = std::min(t1, t);
+      }
+    }
+    if (!(t0 <= t1)) return false;
+    const Point2d a = ga;
+    ga = a + t0 * d;
+    gb = a + t1 * d;
+    // d can overflow for ends beyond +-1e308 even when both are finite.
+    return ga.allFinite() && gb.allFinite();
+  }
 
   /// Unit normal (sensor frame) of the surface beam i hit at its end point q: perpendicular to
   /// the direction to a neighbouring end point, the side whose direction makes the larger angle

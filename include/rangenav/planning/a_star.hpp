@@ -68,7 +68,7 @@ enum class PlanStatus {
 
 /// A planned path: straight segments between waypoints, start first, goal last.
 struct PlannedPath {
-  std::vector<Point2d> waypoints;
+  std::vector<Point2d> waypoints;  ///< start, the Voronoi vertices, goal (m)
   /// One entry per segment (waypoints.size() - 1): the graph edge it follows, or
   /// VoronoiPathGraph::npos for the straight connections of start and goal.
   std::vector<VoronoiPathGraph::index_type> edges;
@@ -77,16 +77,22 @@ struct PlannedPath {
   double length{0.0};  ///< total length (m)
 };
 
+/// The outcome of a query: why it ended, and the path when one was found.
 struct PlanResult {
-  PlanStatus status{PlanStatus::no_path};
-  PlannedPath path;
-  std::size_t expanded{0};  ///< nodes expanded by the graph search
+  PlanStatus status{PlanStatus::no_path};  ///< found, or why not
+  PlannedPath path;                        ///< the path (empty unless found)
+  std::size_t expanded{0};                 ///< nodes expanded by the graph search
+  /// True when a path was found.
   [[nodiscard]] bool found() const { return status == PlanStatus::found; }
 };
 
+/// A* on a VoronoiPathGraph (paper 000 §4, Eq. 6): attaches start and goal to the graph, skips
+/// blocked edges, and keeps its buffers between queries.
 class AStar {
  public:
+  /// A node or edge index.
   using index_type = VoronoiPathGraph::index_type;
+  /// "No node / no edge".
   static constexpr index_type npos = VoronoiPathGraph::npos;
 
   /// Plans on `graph`, which must outlive this object (blocked edges are read at query time).
@@ -95,6 +101,7 @@ class AStar {
     if (params_.attach_candidates == 0)
       detail::throw_invalid_argument("AStar", "params.attach_candidates", 0, "must be > 0");
     detail::require_non_negative("AStar", "params.similar_distance", params_.similar_distance);
+    detail::require_non_negative("AStar", "params.shortcut_length", params_.shortcut_length);
     if (!std::isfinite(params_.connection_clearance))
       detail::throw_invalid_argument("AStar", "params.connection_clearance",
                                      params_.connection_clearance, "must be finite");
@@ -112,6 +119,7 @@ class AStar {
     nodes_ = node_tree(nodes.begin(), nodes.end());
   }
 
+  /// The parameters.
   [[nodiscard]] const AStarParams& params() const { return params_; }
 
   /// Distance from the straight segment a-b to the nearest map point (m).
@@ -123,12 +131,22 @@ class AStar {
     return std::numeric_limits<double>::infinity();
   }
 
-  /// Plans from `start` to `goal` (m). Throws invalid_argument for non-finite coordinates.
+  /// The largest coordinate magnitude plan() accepts (m): every distance it computes, squared
+  /// and summed, stays finite.
+  static constexpr double max_coordinate = 1e150;
+
+  /// Plans from `start` to `goal` (m). Throws invalid_argument for a coordinate that is not
+  /// finite or exceeds max_coordinate.
   [[nodiscard]] PlanResult plan(const Point2d& start, const Point2d& goal) {
-    if (!start.allFinite())
-      detail::throw_invalid_argument("AStar::plan", "start", format_point(start), "must be finite");
-    if (!goal.allFinite())
-      detail::throw_invalid_argument("AStar::plan", "goal", format_point(goal), "must be finite");
+    const auto check = [](const char* name, const Point2d& p) {
+      if (!p.allFinite())
+        detail::throw_invalid_argument("AStar::plan", name, format_point(p), "must be finite");
+      if (!(p.cwiseAbs().maxCoeff() <= max_coordinate))
+        detail::throw_invalid_argument("AStar::plan", name, format_point(p),
+                                       "exceeds AStar::max_coordinate = 1e150 m");
+    };
+    check("start", start);
+    check("goal", goal);
     PlanResult result;
     const std::vector<index_type> starts = attach_candidates(start, goal);
     if (starts.empty()) {
@@ -147,7 +165,17 @@ class AStar {
         std::vector<index_type> edges;
         const auto cost = shortest_path(s, g, &result.path.nodes, &edges, &result.expanded);
         if (!cost) continue;  // cannot happen within one component; kept for safety
-        if (params_.shortcut_ends) shortcut(start, goal, result.path.nodes, edges);
+        if (params_.shortcut_ends) {
+          shortcut(start, goal, result.path.nodes, edges);
+          // The rule of shortcut() for the goal itself: within reach of the start by a clear
+          // segment, no node is needed (start == goal gives a path of length 0).
+          if ((goal - start).norm() <= params_.shortcut_length &&
+              segment_clearance(start, goal) >=
+                  std::min(connection_required(start), connection_required(goal))) {
+            result.path.nodes.clear();
+            edges.clear();
+          }
+        }
         PlannedPath& path = result.path;
         path.waypoints.clear();
         path.edges.clear();
@@ -271,9 +299,12 @@ class AStar {
   /// among those within similar_distance of the closest, the one toward `other` first.
   std::vector<index_type> attach_candidates(const Point2d& pose, const Point2d& other) const {
     std::vector<node_value> near;
-    nodes_.query(boost::geometry::index::nearest(bg_point(pose.x(), pose.y()),
-                                                 static_cast<unsigned>(params_.attach_candidates)),
-                 std::back_inserter(near));
+    // At most the node count (a larger count must not wrap in the conversion to unsigned).
+    const std::size_t k = std::clamp<std::size_t>(params_.attach_candidates, 1,
+                                                  std::max<std::size_t>(graph_->node_count(), 1));
+    nodes_.query(
+        boost::geometry::index::nearest(bg_point(pose.x(), pose.y()), static_cast<unsigned>(k)),
+        std::back_inserter(near));
     // An endpoint already closer to an obstacle than wanted may still leave along a segment that
     // comes no closer than it already is.
     const double required = connection_required(pose);

@@ -21,9 +21,9 @@ namespace rangenav {
 /// A named object: its pose in the map frame and its outline (a polygon in the object's frame,
 /// may be empty for a mere place such as "kitchen").
 struct TopologicalObject {
-  std::string name;
-  Pose2d pose;
-  std::vector<Point2d> shape;
+  std::string name;  ///< unique name, e.g. "refrigerator"
+  Pose2d pose;       ///< the object's pose in the map frame; its x axis points out of its front
+  std::vector<Point2d> shape;  ///< outline in the object's frame (may be empty)
 
   /// The outline in the map frame.
   [[nodiscard]] std::vector<Point2d> footprint() const {
@@ -42,6 +42,7 @@ struct TopologicalObject {
   }
 };
 
+/// Named objects beside the metric map (paper 000 §1: "go to the refrigerator").
 class TopologicalMap {
  public:
   /// Adds an object. Throws invalid_argument for an empty name, a name already present, or a
@@ -101,8 +102,11 @@ class TopologicalMap {
     return best;
   }
 
+  /// All objects, in the order they were added.
   [[nodiscard]] const std::vector<TopologicalObject>& objects() const { return objects_; }
+  /// Number of objects.
   [[nodiscard]] std::size_t size() const { return objects_.size(); }
+  /// True when there are no objects.
   [[nodiscard]] bool empty() const { return objects_.empty(); }
 
  private:

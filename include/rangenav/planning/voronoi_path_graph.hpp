@@ -57,6 +57,7 @@ struct VoronoiPathGraphParams {
   /// Half the robot width plus the safety margin (m).
   [[nodiscard]] double required_clearance() const { return robot_width / 2 + safety_margin; }
 
+  /// Throws invalid_argument naming the first invalid parameter; `where` names the caller.
   void validate(std::string_view where) const {
     detail::require_positive(where, "params.resolution", resolution);
     detail::require_non_negative(where, "params.robot_width", robot_width);
@@ -74,23 +75,29 @@ struct VoronoiPathGraphStats {
   std::size_t pruned_by_clearance{0};  ///< edges dropped by pruning step 2
 };
 
+/// The Voronoi diagram of a 2D point map, pruned to the edges a robot fits through (paper 000
+/// §4): nodes are Voronoi vertices, edges carry their length and clearance.
 class VoronoiPathGraph {
  public:
+  /// A node or edge index.
   using index_type = std::uint32_t;
+  /// "No node / no edge".
   static constexpr index_type npos = std::numeric_limits<index_type>::max();
 
+  /// A graph node: a Voronoi vertex.
   struct Node {
     Point2d position;  ///< the Voronoi vertex (m)
     double clearance;  ///< distance to the nearest site (m)
   };
 
+  /// A graph edge: a pruned Voronoi edge between two vertices.
   struct Edge {
     index_type from;    ///< node index
     index_type to;      ///< node index
     double length;      ///< |to - from| (m)
     double clearance;   ///< smallest distance from the edge to the nearest site (m)
-    index_type site_a;  ///< the two sites the edge bisects (indices into sites())
-    index_type site_b;
+    index_type site_a;  ///< one of the two sites the edge bisects (an index into sites())
+    index_type site_b;  ///< the other site
   };
 
   VoronoiPathGraph() = default;
@@ -116,16 +123,23 @@ class VoronoiPathGraph {
     build(grid);
   }
 
+  /// The parameters.
   [[nodiscard]] const VoronoiPathGraphParams& params() const { return params_; }
+  /// What the build did (points, sites, edges pruned).
   [[nodiscard]] const VoronoiPathGraphStats& stats() const { return stats_; }
   /// The snapped, de-duplicated map points (m), in lexicographic order.
   [[nodiscard]] const std::vector<Point2d>& sites() const { return sites_; }
   /// The convex hull of the sites (m), counter-clockwise, closed (first point repeated).
   [[nodiscard]] const std::vector<Point2d>& hull() const { return hull_; }
+  /// The graph's nodes.
   [[nodiscard]] const std::vector<Node>& nodes() const { return nodes_; }
+  /// The graph's edges (undirected).
   [[nodiscard]] const std::vector<Edge>& edges() const { return edges_; }
+  /// Number of nodes.
   [[nodiscard]] std::size_t node_count() const { return nodes_.size(); }
+  /// Number of edges.
   [[nodiscard]] std::size_t edge_count() const { return edges_.size(); }
+  /// True when no edge survived the pruning.
   [[nodiscard]] bool empty() const { return edges_.empty(); }
 
   /// The edges incident to `node` (indices into edges()).
@@ -157,7 +171,9 @@ class VoronoiPathGraph {
     blocked_count_ = 0;
     ++revision_;
   }
+  /// True when `edge` is marked blocked.
   [[nodiscard]] bool is_blocked(index_type edge) const { return blocked_[edge] != 0; }
+  /// Number of blocked edges.
   [[nodiscard]] std::size_t blocked_count() const { return blocked_count_; }
   /// Changes whenever the set of blocked edges changes (planners cache per revision).
   [[nodiscard]] std::uint64_t revision() const { return revision_; }

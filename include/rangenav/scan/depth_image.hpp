@@ -24,9 +24,12 @@ namespace rangenav {
 /// Pinhole intrinsics: pixel (u, v) = (column, row) sees the optical ray ((u-cx)/fx, (v-cy)/fy, 1).
 template <std::floating_point Scalar = double>
 struct PinholeIntrinsics {
-  std::size_t width{0};
-  std::size_t height{0};
-  Scalar fx{0}, fy{0}, cx{0}, cy{0};
+  std::size_t width{0};   ///< pixels per row
+  std::size_t height{0};  ///< rows
+  Scalar fx{0};           ///< focal length in pixels, along a row
+  Scalar fy{0};           ///< focal length in pixels, along a column
+  Scalar cx{0};           ///< principal point, column (pixels)
+  Scalar cy{0};           ///< principal point, row (pixels)
 
   /// Intrinsics of a camera with the given resolution and full horizontal / vertical apertures,
   /// e.g. from_fov(176, 144, deg_to_rad(43.0), deg_to_rad(34.0)) for the SR4000.
@@ -41,6 +44,8 @@ struct PinholeIntrinsics {
             (w - 1) / 2, (h - 1) / 2};
   }
 
+  /// Throws invalid_argument unless width, height, fx and fy are positive and every value is
+  /// finite.
   void validate(std::string_view where = "PinholeIntrinsics") const {
     if (width == 0) detail::throw_invalid_argument(where, "width", width, "must be > 0");
     if (height == 0) detail::throw_invalid_argument(where, "height", height, "must be > 0");
@@ -68,21 +73,29 @@ enum class CameraFrame {
   optical,  ///< computer-vision convention: x right, y down, z along the optical axis
 };
 
+/// An organised range image: one depth per pixel (row-major), its camera's intrinsics, and an
+/// optional amplitude channel (ToF cameras).
 template <std::floating_point Scalar = double>
 struct DepthImage {
-  PinholeIntrinsics<Scalar> intrinsics{};
-  DepthKind kind{DepthKind::radial};
-  std::vector<Scalar> depth;      ///< row-major, width*height; NaN, inf or <= 0 is invalid
-  std::vector<Scalar> amplitude;  ///< empty, or row-major width*height
-  double timestamp{0.0};
+  PinholeIntrinsics<Scalar> intrinsics{};  ///< the camera's pinhole model
+  DepthKind kind{DepthKind::radial};       ///< what the depth is measured along
+  std::vector<Scalar> depth;               ///< row-major, width*height; NaN, inf or <= 0 is invalid
+  std::vector<Scalar> amplitude;           ///< empty, or row-major width*height
+  double timestamp{0.0};                   ///< s, when the frame was taken
 
+  /// Pixels per row.
   [[nodiscard]] std::size_t width() const { return intrinsics.width; }
+  /// Rows.
   [[nodiscard]] std::size_t height() const { return intrinsics.height; }
+  /// The depth at (row, col).
   [[nodiscard]] Scalar at(std::size_t row, std::size_t col) const {
     return depth[row * intrinsics.width + col];
   }
+  /// True for a finite, positive depth.
   [[nodiscard]] static bool is_valid_depth(Scalar d) { return std::isfinite(d) && d > Scalar(0); }
 
+  /// Throws invalid_argument when the intrinsics are invalid or the channel sizes disagree with
+  /// width x height; `where` names the caller in the message.
   void validate(std::string_view where = "DepthImage") const {
     intrinsics.validate(where);
     const std::size_t n = intrinsics.width * intrinsics.height;

@@ -42,9 +42,11 @@ struct ScanGeometry {
     return {-fov / 2, resolution, n, range_min_m, range_max_m};
   }
 
+  /// The bearing of beam i (rad).
   [[nodiscard]] Scalar angle(std::size_t i) const {
     return angle_min + static_cast<Scalar>(i) * angle_increment;
   }
+  /// The bearing of the last beam (rad).
   [[nodiscard]] Scalar angle_max() const {
     return beam_count == 0 ? angle_min : angle(beam_count - 1);
   }
@@ -66,10 +68,14 @@ struct ScanGeometry {
   }
 };
 
+/// A 2D laser scan: one range per beam, the beams' Cartesian points (computed once, Eq. (2) of
+/// paper 002) and validity flags. It models PointCloud over its valid points.
 template <std::floating_point Scalar = double>
 class LaserScan {
  public:
+  /// The range type.
   using scalar_type = Scalar;
+  /// The point type, Point<2, Scalar>.
   using point_type = Point<2, Scalar>;
 
   /// An empty scan (no beams).
@@ -97,27 +103,43 @@ class LaserScan {
     check_and_cache();
   }
 
+  /// The beam layout.
   [[nodiscard]] const ScanGeometry<Scalar>& geometry() const { return geometry_; }
+  /// Number of beams.
   [[nodiscard]] std::size_t size() const { return ranges_.size(); }
+  /// True when the scan has no beams.
   [[nodiscard]] bool empty() const { return ranges_.empty(); }
+  /// The first beam's bearing (rad).
   [[nodiscard]] Scalar angle_min() const { return geometry_.angle_min; }
+  /// The last beam's bearing (rad).
   [[nodiscard]] Scalar angle_max() const { return geometry_.angle_max(); }
+  /// The step between beams (rad).
   [[nodiscard]] Scalar angle_increment() const { return geometry_.angle_increment; }
+  /// Readings below this are invalid (m).
   [[nodiscard]] Scalar range_min() const { return geometry_.range_min; }
+  /// Readings at or beyond this are invalid, "no return" (m).
   [[nodiscard]] Scalar range_max() const { return geometry_.range_max; }
+  /// When the scan was taken (s).
   [[nodiscard]] double timestamp() const { return timestamp_; }
+  /// Sets when the scan was taken (s).
   void set_timestamp(double t) { timestamp_ = t; }
 
+  /// Every beam's range, valid or not (m).
   [[nodiscard]] const std::vector<Scalar>& ranges() const { return ranges_; }
+  /// Beam i's range (m).
   [[nodiscard]] Scalar range(std::size_t i) const { return ranges_[i]; }
+  /// Beam i's bearing (rad).
   [[nodiscard]] Scalar angle(std::size_t i) const { return geometry_.angle(i); }
+  /// Every beam's intensity; empty when the sensor gave none.
   [[nodiscard]] const std::vector<Scalar>& intensities() const { return intensities_; }
+  /// True when there is one intensity per beam.
   [[nodiscard]] bool has_intensities() const { return !intensities_.empty(); }
 
   /// Whether a range is a valid reading for this scan's limits.
   [[nodiscard]] bool is_valid_range(Scalar r) const {
     return std::isfinite(r) && r > Scalar(0) && r >= geometry_.range_min && r < geometry_.range_max;
   }
+  /// False when beam i's reading is NaN, infinite, 0, below range_min or at or beyond range_max.
   [[nodiscard]] bool is_valid(std::size_t i) const { return valid_[i] != 0; }
 
   /// Cartesian point of beam i (Eq. 2); for invalid beams the point of whatever range is stored.
@@ -129,6 +151,7 @@ class LaserScan {
   [[nodiscard]] const std::vector<std::uint32_t>& valid_indices() const { return valid_indices_; }
   /// Cartesian points of the valid beams, in beam order.
   [[nodiscard]] const std::vector<point_type>& valid_points() const { return valid_points_; }
+  /// Number of valid beams.
   [[nodiscard]] std::size_t valid_count() const { return valid_indices_.size(); }
 
   /// Replaces the ranges (same beam count) and refreshes the cached coordinates.
@@ -190,16 +213,22 @@ class LaserScan {
   std::vector<point_type> valid_points_;
 };
 
+/// A laser scan in double precision.
 using LaserScand = LaserScan<double>;
+/// A laser scan in single precision.
 using LaserScanf = LaserScan<float>;
 
 namespace traits {
 /// A LaserScan is a 2D PointCloud of its valid points.
 template <class S>
 struct cloud_access<LaserScan<S>> {
+  /// A scan is two-dimensional.
   static constexpr int dimension = 2;
+  /// The range type.
   using Scalar = S;
+  /// Number of valid beams.
   static std::size_t size(const LaserScan<S>& s) { return s.valid_count(); }
+  /// The i-th valid beam's point (sensor frame).
   static const Point<2, S>& point(const LaserScan<S>& s, std::size_t i) {
     return s.valid_points()[i];
   }

@@ -38,8 +38,8 @@ template <std::floating_point Scalar>
 /// A 2D scan tagged with the pitch angle at which it was taken.
 template <std::floating_point Scalar = double>
 struct PitchedScan {
-  LaserScan<Scalar> scan;
-  Scalar pitch{0};  ///< rad; positive tilts the measurement plane downwards (Eq. 3)
+  LaserScan<Scalar> scan;  ///< the 2D scan, in the scanner's frame
+  Scalar pitch{0};         ///< rad; positive tilts the measurement plane downwards (Eq. 3)
 };
 
 /// The valid readings of a scan taken at `pitch`, as 3D points in the robot frame (Eq. 3).

@@ -140,6 +140,7 @@ struct JumpEdgeParams {
   /// 8 cm of a surface. 0: Eq. (14) alone.
   Scalar min_jump{Scalar(0.08)};
 
+  /// Throws invalid_argument unless min_jump >= 0 and epsilon_theta lies in (pi/2, pi).
   void validate(std::string_view where = "JumpEdgeParams") const {
     detail::require_non_negative(where, "min_jump", min_jump);
     if (!(epsilon_theta > std::numbers::pi_v<Scalar> / 2 &&
@@ -156,6 +157,8 @@ template <std::floating_point Scalar = double>
 class JumpEdgeFilter {
  public:
   JumpEdgeFilter() = default;
+  /// The filter for a camera with these intrinsics and depth kind. Throws invalid_argument for
+  /// invalid intrinsics or parameters.
   JumpEdgeFilter(const PinholeIntrinsics<Scalar>& intrinsics, DepthKind kind,
                  const JumpEdgeParams<Scalar>& params = {})
       : intrinsics_(intrinsics), kind_(kind), params_(params) {
@@ -190,6 +193,7 @@ class JumpEdgeFilter {
       }
   }
 
+  /// The filter's parameters.
   [[nodiscard]] const JumpEdgeParams<Scalar>& params() const { return params_; }
 
   /// Marks the jump edges of `image` (same intrinsics as the filter) invalid; returns how many.

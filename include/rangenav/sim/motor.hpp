@@ -31,6 +31,7 @@ struct Pt1MotorParams {
   double gain = 1.0;            ///< K: fraction of the no-load characteristic delivered, >= 0
   double load_offset = 0.2;     ///< constant speed lost to the floor (m/s), >= 0
 
+  /// Throws invalid_argument for a non-positive time constant or a negative gain or offset.
   void validate() const {
     constexpr std::string_view where = "Pt1MotorParams";
     detail::require_positive(where, "time_constant", time_constant);
@@ -70,8 +71,11 @@ class Pt1Motor {
     return v_;
   }
 
+  /// The wheel's speed (m/s).
   [[nodiscard]] double speed() const { return v_; }
+  /// Sets the wheel's speed (m/s).
   void reset(double speed = 0.0) { v_ = speed; }
+  /// The parameters.
   [[nodiscard]] const Pt1MotorParams& params() const { return params_; }
 
  private:

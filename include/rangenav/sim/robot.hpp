@@ -27,15 +27,17 @@ namespace rangenav::sim {
 /// The robot's outline on the floor and the height band it occupies: obstacles whose z-range
 /// overlaps [z_min, z_max] can be touched; a table top above z_max can be driven under.
 struct Footprint {
+  /// The footprint's form.
   enum class Shape { circle, rectangle };
-  Shape shape{Shape::circle};
-  double radius{0.3};    ///< circle
-  double length{0.6};    ///< rectangle, along the robot's x axis
-  double width{0.5};     ///< rectangle, along y
-  double x_offset{0.0};  ///< rectangle centre ahead of the rotation centre
-  double z_min{0.02};    ///< ground clearance (m)
-  double z_max{1.2};     ///< top of the robot (m)
+  Shape shape{Shape::circle};  ///< circle or rectangle
+  double radius{0.3};          ///< circle
+  double length{0.6};          ///< rectangle, along the robot's x axis
+  double width{0.5};           ///< rectangle, along y
+  double x_offset{0.0};        ///< rectangle centre ahead of the rotation centre
+  double z_min{0.02};          ///< ground clearance (m)
+  double z_max{1.2};           ///< top of the robot (m)
 
+  /// A circular footprint of `radius` (m) over the height band [z_min, z_max].
   [[nodiscard]] static Footprint circle(double radius, double z_min = 0.02, double z_max = 1.2) {
     Footprint f;
     f.radius = radius;
@@ -43,6 +45,8 @@ struct Footprint {
     f.z_max = z_max;
     return f;
   }
+  /// A rectangular footprint `length` x `width` (m) over [z_min, z_max], its centre `x_offset`
+  /// ahead of the rotation centre.
   [[nodiscard]] static Footprint rectangle(double length, double width, double z_min = 0.02,
                                            double z_max = 1.2, double x_offset = 0.0) {
     Footprint f;
@@ -55,6 +59,7 @@ struct Footprint {
     return f;
   }
 
+  /// Throws invalid_argument for a non-positive size or an empty height band.
   void validate(std::string_view where) const {
     if (shape == Shape::circle) {
       detail::require_positive(where, "footprint.radius", radius);
@@ -238,12 +243,13 @@ struct OdometryNoise {
   double omega_sigma{0.0};  ///< rad/s per step
 };
 
+/// Parameters of the simulated differential-drive robot.
 struct DifferentialDriveParams {
   double control_rate{50.0};  ///< Hz
   double max_v{1.0};          ///< |v| is clamped to this (m/s)
   double max_omega{2.0};      ///< |omega| is clamped to this (rad/s)
-  Footprint footprint{};
-  OdometryNoise odometry{};
+  Footprint footprint{};      ///< what the robot may touch
+  OdometryNoise odometry{};   ///< odometry errors
 };
 
 /// What one control step did.
@@ -251,11 +257,15 @@ struct StepResult {
   bool moved{true};                    ///< false when the step would have hit something
   std::vector<PrimitiveRef> contacts;  ///< what the robot would touch at the step's end
   double v_measured{0};                ///< odometry's velocity reading for this step
-  double omega_measured{0};
+  double omega_measured{0};            ///< odometry's angular-velocity reading for this step
 };
 
+/// A differential-drive robot: (v, omega) steps integrated exactly along arcs, odometry with
+/// errors, and a footprint that stops a step before it touches the world.
 class DifferentialDriveRobot {
  public:
+  /// A robot at `start` (its odometry starts there too); throws invalid_argument for invalid
+  /// parameters.
   explicit DifferentialDriveRobot(const DifferentialDriveParams& params = {},
                                   const Pose2d& start = {})
       : params_(params) {
@@ -282,10 +292,15 @@ class DifferentialDriveRobot {
     time_ = 0;
   }
 
+  /// The parameters.
   [[nodiscard]] const DifferentialDriveParams& params() const { return params_; }
+  /// The true pose (world frame).
   [[nodiscard]] const Pose2d& pose() const { return pose_; }
+  /// The pose odometry reports (starts at the start pose, drifts).
   [[nodiscard]] const Pose2d& odometry() const { return odometry_; }
+  /// Simulated time (s).
   [[nodiscard]] double time() const { return time_; }
+  /// The control period, 1 / control_rate (s).
   [[nodiscard]] double dt() const { return 1.0 / params_.control_rate; }
 
   /// The unicycle model integrated exactly over dt (an arc, or a line when omega = 0).

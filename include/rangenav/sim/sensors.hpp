@@ -58,6 +58,7 @@ struct RangeNoise {
   double sigma{0.01};               ///< Gaussian range noise (m)
   double dropout_probability{0.0};  ///< chance that a beam returns a max-range reading
 
+  /// Throws invalid_argument for a negative sigma or a dropout probability outside [0, 1].
   void validate(std::string_view where) const {
     detail::require_non_negative(where, "noise.sigma", sigma);
     if (!(dropout_probability >= 0 && dropout_probability <= 1))
@@ -80,17 +81,20 @@ struct RangeNoise {
 
 // ---- 2D laser scanner ---------------------------------------------------------------------
 
+/// Parameters of the simulated 2D laser scanner.
 struct LaserScannerParams {
   /// SICK S300: 270 deg at 0.5 deg (541 beams), readings from 0.05 m to 30 m.
   ScanGeometry<double> geometry =
       ScanGeometry<double>::from_fov(deg_to_rad(270.0), deg_to_rad(0.5), 0.05, 30.0);
   /// Sensor frame in the robot frame; the default sits level at 0.30 m on the robot's centre.
   Transform3d mount = mounting(0, 0, 0.30);
-  RangeNoise noise{};
+  RangeNoise noise{};  ///< range noise and dropouts
 };
 
+/// A simulated 2D laser scanner (a SICK S300 by default).
 class LaserScanner2D {
  public:
+  /// A scanner with these parameters; throws invalid_argument for invalid ones.
   explicit LaserScanner2D(const LaserScannerParams& params = {}) : params_(params) {
     params_.geometry.validate("LaserScanner2D");
     params_.noise.validate("LaserScanner2D");
@@ -105,6 +109,7 @@ class LaserScanner2D {
     }
   }
 
+  /// The parameters.
   [[nodiscard]] const LaserScannerParams& params() const { return params_; }
 
   /// The true hit of every beam from the robot pose (no noise).
@@ -160,6 +165,7 @@ class LaserScanner2D {
 
 // ---- continuously pitching scanner --------------------------------------------------------
 
+/// Parameters of the simulated continuously pitching scanner (paper 002 §3.3).
 struct PitchingScannerParams {
   /// SICK LMS 2xx in the mode of paper 002 §3.3: 180 deg at 1 deg (181 beams) in 13.32 ms.
   ScanGeometry<double> geometry =
@@ -167,16 +173,19 @@ struct PitchingScannerParams {
   double scan_period{0.01332};  ///< s per 2D scan
   /// Area of interest [pitch_min, pitch_max] (rad, positive looks down, Eq. 3).
   double pitch_min{deg_to_rad(-10.0)};
-  double pitch_max{deg_to_rad(40.0)};
+  double pitch_max{deg_to_rad(40.0)};  ///< the most downward pitch (rad)
   /// Pitch rate (rad/s); the default turns 1 deg per 2D scan.
   double pitch_rate{deg_to_rad(1.0) / 0.01332};
   /// t_s of Eq. 3: the scanner's pitch axis in the robot frame.
   Point3d sensor_offset{0.15, 0.0, 0.55};
-  RangeNoise noise{};
+  RangeNoise noise{};  ///< range noise and dropouts
 };
 
+/// A simulated continuously pitching 2D scanner: one PitchedScan per scan period, nodding
+/// between pitch_min and pitch_max.
 class PitchingScanner {
  public:
+  /// A scanner with these parameters; throws invalid_argument for invalid ones.
   explicit PitchingScanner(const PitchingScannerParams& params = {}) : params_(params) {
     constexpr std::string_view where = "PitchingScanner";
     params_.geometry.validate(where);
@@ -193,6 +202,7 @@ class PitchingScanner {
       detail::throw_invalid(where, "sensor_offset must be finite");
   }
 
+  /// The parameters.
   [[nodiscard]] const PitchingScannerParams& params() const { return params_; }
 
   /// Time of the k-th 2D scan (k * scan_period).
@@ -251,6 +261,7 @@ class PitchingScanner {
 
 // ---- time-of-flight camera ----------------------------------------------------------------
 
+/// Parameters of the simulated time-of-flight camera.
 struct TofCameraParams {
   /// SwissRanger SR4000: 176 x 144 pixels, 43 x 34 deg.
   PinholeIntrinsics<double> intrinsics =
@@ -268,8 +279,11 @@ struct TofCameraParams {
   std::size_t edge_subsamples{4};  ///< k x k rays per straddling pixel
 };
 
+/// A simulated time-of-flight camera on a pan-tilt head: radial depth with noise, amplitude,
+/// and mixed pixels at jump edges (paper 002 §7.1).
 class TofCamera {
  public:
+  /// A camera with these parameters; throws invalid_argument for invalid ones.
   explicit TofCamera(const TofCameraParams& params = {}) : params_(params) {
     constexpr std::string_view where = "TofCamera";
     params_.intrinsics.validate(where);
@@ -287,8 +301,10 @@ class TofCamera {
                                      "must be in [1, 16]");
   }
 
+  /// The parameters (pan and tilt as last set).
   [[nodiscard]] const TofCameraParams& params() const { return params_; }
 
+  /// Points the camera: pan and tilt in rad (see TofCameraParams); throws for non-finite values.
   void set_pan_tilt(double pan, double tilt) {
     detail::require_finite("TofCamera::set_pan_tilt", "pan", pan);
     detail::require_finite("TofCamera::set_pan_tilt", "tilt", tilt);
@@ -384,8 +400,12 @@ class TofCamera {
   /// real edge pixel reads its true depth and has a 4-neighbour at least `edge_step` deeper (or
   /// without a return). `after` is the filter's output; border pixels are not judged.
   struct JumpEdgeScore {
-    std::size_t mixed = 0, mixed_removed = 0, edges = 0, edges_kept = 0;
+    std::size_t mixed = 0;          ///< mixed pixels in the filter's input
+    std::size_t mixed_removed = 0;  ///< of them, removed by the filter
+    std::size_t edges = 0;          ///< real edge pixels in the filter's input
+    std::size_t edges_kept = 0;     ///< of them, kept by the filter
   };
+  /// Scores a jump-edge filter (see JumpEdgeScore); `edge_step` (m) defines a real edge.
   [[nodiscard]] JumpEdgeScore score_jump_edges(const std::vector<double>& truth,
                                                const DepthImage<double>& before,
                                                const DepthImage<double>& after,

@@ -41,38 +41,38 @@ namespace rangenav::sim {
 
 /// A vertical wall over the segment a-b, from the floor up to `height`.
 struct Wall {
-  Point2d a{0, 0};
-  Point2d b{0, 0};
-  double height{2.5};
+  Point2d a{0, 0};     ///< one end (m)
+  Point2d b{0, 0};     ///< the other end (m)
+  double height{2.5};  ///< m above the floor
 };
 
 /// A block rotated by `yaw` about z: footprint centred at `center` with full side lengths
 /// `size` along its own x and y axes, occupying z_min <= z <= z_max.
 struct Box {
-  Point2d center{0, 0};
-  Point2d size{0, 0};
-  double yaw{0};
-  double z_min{0};
-  double z_max{0};
+  Point2d center{0, 0};  ///< footprint centre (m)
+  Point2d size{0, 0};    ///< full side lengths along its own axes (m)
+  double yaw{0};         ///< rad about z
+  double z_min{0};       ///< m, bottom
+  double z_max{0};       ///< m, top
 };
 
 /// A vertical cylinder of `radius` about `center`, occupying z_min <= z <= z_max.
 struct Cylinder {
-  Point2d center{0, 0};
-  double radius{0};
-  double z_min{0};
-  double z_max{0};
+  Point2d center{0, 0};  ///< axis position (m)
+  double radius{0};      ///< m
+  double z_min{0};       ///< m, bottom
+  double z_max{0};       ///< m, top
 };
 
 /// A hinged door leaf. Closed, the leaf extends `length` from the hinge in direction
 /// `closed_yaw`; the leaf direction is closed_yaw + opening.
 struct Door {
-  Point2d hinge{0, 0};
-  double closed_yaw{0};
-  double length{0.9};
-  double opening{0};  ///< rad, 0 = closed, positive turns counter-clockwise
-  double thickness{0.04};
-  double height{2.0};
+  Point2d hinge{0, 0};     ///< the hinge (m)
+  double closed_yaw{0};    ///< rad, direction of the closed leaf
+  double length{0.9};      ///< m, leaf length
+  double opening{0};       ///< rad, 0 = closed, positive turns counter-clockwise
+  double thickness{0.04};  ///< m
+  double height{2.0};      ///< m
 
   /// The leaf as a box: from the hinge along closed_yaw + opening, centred across its thickness.
   [[nodiscard]] Box leaf() const {
@@ -84,10 +84,10 @@ struct Door {
 
 /// A region where the floor lies `depth` below z = 0 (a rotated rectangle as for Box).
 struct FloorHole {
-  Point2d center{0, 0};
-  Point2d size{0, 0};
-  double yaw{0};
-  double depth{0};
+  Point2d center{0, 0};  ///< centre (m)
+  Point2d size{0, 0};    ///< full side lengths along its own axes (m)
+  double yaw{0};         ///< rad about z
+  double depth{0};       ///< m below z = 0
 };
 
 /// What a ray hit.
@@ -105,27 +105,32 @@ enum class SurfaceKind : std::uint8_t {
 /// The nearest surface along a ray: its distance from the origin (along the unit direction),
 /// what it is and which one. range is +inf when nothing was hit.
 struct RayHit {
+  /// m along the ray, +inf when nothing was hit
   double range{std::numeric_limits<double>::infinity()};
-  SurfaceKind kind{SurfaceKind::none};
-  std::uint32_t index{0};
+  SurfaceKind kind{SurfaceKind::none};  ///< what was hit
+  std::uint32_t index{0};               ///< which one, for primitives
 
+  /// True when something was hit.
   [[nodiscard]] bool hit() const { return kind != SurfaceKind::none; }
 };
 
 /// A primitive of a World: its kind (wall, box, cylinder, door, hole) and index.
 struct PrimitiveRef {
-  SurfaceKind kind{SurfaceKind::none};
-  std::uint32_t index{0};
+  SurfaceKind kind{SurfaceKind::none};  ///< its kind
+  std::uint32_t index{0};               ///< its index in the World's list of that kind
   friend bool operator==(const PrimitiveRef&, const PrimitiveRef&) = default;
   friend bool operator<(const PrimitiveRef& a, const PrimitiveRef& b) {
     return a.kind != b.kind ? a.kind < b.kind : a.index < b.index;
   }
 };
 
+/// A simulated world of walls, boxes, cylinders, doors, floor holes and an optional ceiling,
+/// with ray casting in 2D and 3D through a uniform grid (call build_index() after adding).
 class World {
  public:
   // ---- building ----------------------------------------------------------------------------
 
+  /// Adds a wall; returns its index. Throws invalid_argument for a non-finite or degenerate one.
   std::size_t add_wall(const Wall& wall) {
     constexpr std::string_view where = "World::add_wall";
     require_finite_point(where, "a", wall.a);
@@ -137,6 +142,7 @@ class World {
     return walls_.size() - 1;
   }
 
+  /// Adds the wall a-b of `height`; returns its index.
   std::size_t add_wall(const Point2d& a, const Point2d& b, double height = 2.5) {
     return add_wall(Wall{a, b, height});
   }
@@ -150,6 +156,7 @@ class World {
       add_wall(vertices[i], vertices[(i + 1) % vertices.size()], height);
   }
 
+  /// Adds a box; returns its index. Throws invalid_argument for an invalid one.
   std::size_t add_box(const Box& box) {
     constexpr std::string_view where = "World::add_box";
     require_finite_point(where, "center", box.center);
@@ -163,6 +170,7 @@ class World {
     return boxes_.size() - 1;
   }
 
+  /// Adds a cylinder; returns its index. Throws invalid_argument for an invalid one.
   std::size_t add_cylinder(const Cylinder& cylinder) {
     constexpr std::string_view where = "World::add_cylinder";
     require_finite_point(where, "center", cylinder.center);
@@ -173,6 +181,7 @@ class World {
     return cylinders_.size() - 1;
   }
 
+  /// Adds a door; returns its index. Throws invalid_argument for an invalid one.
   std::size_t add_door(const Door& door) {
     constexpr std::string_view where = "World::add_door";
     require_finite_point(where, "hinge", door.hinge);
@@ -187,6 +196,7 @@ class World {
     return doors_.size() - 1;
   }
 
+  /// Adds a floor hole; returns its index. Throws invalid_argument for an invalid one.
   std::size_t add_hole(const FloorHole& hole) {
     constexpr std::string_view where = "World::add_hole";
     require_finite_point(where, "center", hole.center);
@@ -204,6 +214,7 @@ class World {
     detail::require_non_negative("World::set_ceiling_height", "height", height);
     ceiling_height_ = height;
   }
+  /// The ceiling's height (m); 0 = no ceiling.
   [[nodiscard]] double ceiling_height() const { return ceiling_height_; }
 
   /// Turns door i to `opening` rad (0 = closed). Needs no index rebuild.
@@ -216,11 +227,17 @@ class World {
     door_cache_[i] = CachedBox::from(doors_[i].leaf());
   }
 
+  /// The walls.
   [[nodiscard]] const std::vector<Wall>& walls() const { return walls_; }
+  /// The boxes.
   [[nodiscard]] const std::vector<Box>& boxes() const { return boxes_; }
+  /// The cylinders.
   [[nodiscard]] const std::vector<Cylinder>& cylinders() const { return cylinders_; }
+  /// The doors.
   [[nodiscard]] const std::vector<Door>& doors() const { return doors_; }
+  /// The floor holes.
   [[nodiscard]] const std::vector<FloorHole>& holes() const { return holes_; }
+  /// Number of primitives of every kind.
   [[nodiscard]] std::size_t primitive_count() const {
     return walls_.size() + boxes_.size() + cylinders_.size() + doors_.size();
   }
@@ -286,7 +303,9 @@ class World {
     }
   }
 
+  /// True once build_index() has run since the last change.
   [[nodiscard]] bool has_index() const { return index_built_; }
+  /// The ray-casting grid's cell edge (m).
   [[nodiscard]] double cell_size() const { return cell_size_; }
 
   // ---- ray casting -------------------------------------------------------------------------

@@ -13,9 +13,15 @@
 //
 // write_world() writes every number with 17 significant digits, so reading back gives the same
 // world (polygons come back as their walls). Malformed lines raise io_error naming the source and
-// the line number.
+// the line number, and so do numbers and sizes beyond WorldFileLimits: every number must be finite
+// and at most max_coordinate in magnitude, so that the world's extent (each value finite, their
+// difference need not be: -1e308 to 1e308) and the ray-casting index built over it stay finite
+// and bounded. The index of a world whose 2 m grid cells would exceed max_index_cells gets cells
+// as coarse as that bound requires (the index changes the speed of ray casting, never a result).
 
+#include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <cstddef>
 #include <filesystem>
 #include <fstream>
@@ -26,6 +32,7 @@
 #include <string>
 #include <string_view>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include "rangenav/core/error.hpp"
@@ -65,16 +72,86 @@ inline std::vector<std::string_view> split(std::string_view text) {
 
 }  // namespace detail_world_file
 
+/// Upper bounds on what read_world() accepts.
+struct WorldFileLimits {
+  /// Largest magnitude of any number (m, rad); 1000 km holds any building or campus.
+  double max_coordinate = 1e6;
+  /// Most primitives (walls, boxes, cylinders, doors, holes; a polygon counts its walls).
+  std::size_t max_primitives = std::size_t{1} << 20;
+  /// Longest line (bytes).
+  std::size_t max_line_bytes = std::size_t{1} << 24;
+  /// Most cells of the ray-casting index (see the top of this file).
+  std::size_t max_index_cells = std::size_t{1} << 16;
+
+  /// Throws invalid_argument naming the first bad limit.
+  void validate(std::string_view where) const {
+    detail::require_positive(where, "limits.max_coordinate", max_coordinate);
+    if (max_primitives == 0)
+      detail::throw_invalid_argument(where, "limits.max_primitives", max_primitives, "must be > 0");
+    if (max_line_bytes == 0)
+      detail::throw_invalid_argument(where, "limits.max_line_bytes", max_line_bytes, "must be > 0");
+    if (max_index_cells == 0)
+      detail::throw_invalid_argument(where, "limits.max_index_cells", max_index_cells,
+                                     "must be > 0");
+  }
+};
+
+namespace detail_world_file {
+
+/// std::getline with a bound: false at the end of the stream; `too_long` set when the line
+/// exceeds `max_bytes` (the read then stops there).
+inline bool read_line(std::istream& in, std::string& line, std::size_t max_bytes, bool& too_long) {
+  line.clear();
+  too_long = false;
+  const std::istream::sentry ok(in, true);
+  if (!ok) return false;
+  std::streambuf* buffer = in.rdbuf();
+  for (bool any = false;; any = true) {
+    const int c = buffer->sbumpc();
+    if (c == std::char_traits<char>::eof()) {
+      in.setstate(any ? std::ios::eofbit : std::ios::eofbit | std::ios::failbit);
+      return any;
+    }
+    if (c == '\n') return true;
+    if (line.size() >= max_bytes) {
+      too_long = true;
+      return true;
+    }
+    line.push_back(static_cast<char>(c));
+  }
+}
+
+/// The index cell size for `world`: 0 (World's own choice) unless 2 m cells, the coarsest it
+/// picks, would exceed max_cells over the world's bounds; then cells just large enough.
+inline double index_cell_size(const World& world, std::size_t max_cells) {
+  if (world.primitive_count() == 0) return 0;
+  const auto [lo, hi] = world.bounds();
+  const Point2d extent = hi - lo;
+  const double area = std::max(extent.x(), 2.0) * std::max(extent.y(), 2.0);
+  const double cells = static_cast<double>(max_cells);
+  return area / 4.0 > cells ? std::sqrt(area / cells) : 0.0;
+}
+
+}  // namespace detail_world_file
+
 /// Reads a world in the text format from `in`; `source` names it in error messages. The index
-/// is built.
-[[nodiscard]] inline World read_world(std::istream& in, std::string_view source = "<stream>") {
+/// is built. Throws io_error naming the source and line for a malformed line or a number, line or
+/// primitive count beyond `limits`.
+[[nodiscard]] inline World read_world(std::istream& in, std::string_view source = "<stream>",
+                                      const WorldFileLimits& limits = {}) {
   using detail_world_file::concat;
   using detail_world_file::fail;
+  limits.validate("read_world");
   World world;
   std::string line;
   std::size_t line_number = 0;
-  while (std::getline(in, line)) {
+  bool too_long = false;
+  while (detail_world_file::read_line(in, line, limits.max_line_bytes, too_long)) {
     ++line_number;
+    if (too_long)
+      fail(source, line_number,
+           concat({"line longer than WorldFileLimits::max_line_bytes = ",
+                   std::to_string(limits.max_line_bytes), " bytes"}));
     std::string_view text(line);
     if (const auto hash = text.find('#'); hash != std::string_view::npos)
       text = text.substr(0, hash);
@@ -89,6 +166,11 @@ inline std::vector<std::string_view> split(std::string_view text) {
       const auto [ptr, ec] = std::from_chars(first, last, x);
       if (ec != std::errc() || ptr != last)
         fail(source, line_number, concat({"bad number '", tokens[k], "'"}));
+      if (!(std::abs(x) <= limits.max_coordinate))
+        fail(source, line_number,
+             concat({"number ", std::to_string(k), " = '", tokens[k],
+                     "' is not finite or exceeds WorldFileLimits::max_coordinate = ",
+                     detail::format_value(limits.max_coordinate)}));
       v.push_back(x);
     }
     const auto need = [&](std::size_t lo, std::size_t hi) {
@@ -99,6 +181,11 @@ inline std::vector<std::string_view> split(std::string_view text) {
              concat({"'", kind, "' needs ", counts, " numbers, got ", std::to_string(v.size())}));
       }
     };
+    const std::size_t adds = kind == "polygon" ? v.size() / 2 : 1;
+    if (world.primitive_count() + world.holes().size() + adds > limits.max_primitives)
+      fail(source, line_number,
+           concat({"more than WorldFileLimits::max_primitives = ",
+                   std::to_string(limits.max_primitives), " primitives"}));
     try {
       if (kind == "ceiling") {
         need(1, 1);
@@ -140,17 +227,18 @@ inline std::vector<std::string_view> split(std::string_view text) {
       fail(source, line_number, e.what());
     }
   }
-  world.build_index();
+  world.build_index(detail_world_file::index_cell_size(world, limits.max_index_cells));
   return world;
 }
 
 /// Loads a world file (see the format above); throws io_error when it cannot be read.
-[[nodiscard]] inline World load_world(const std::filesystem::path& path) {
+[[nodiscard]] inline World load_world(const std::filesystem::path& path,
+                                      const WorldFileLimits& limits = {}) {
   std::ifstream in(path);
   if (!in)
     throw io_error(
         detail_world_file::concat({"rangenav: cannot open world file '", path.string(), "'"}));
-  return read_world(in, path.string());
+  return read_world(in, path.string(), limits);
 }
 
 /// Writes a world in the text format.

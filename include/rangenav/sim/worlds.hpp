@@ -35,10 +35,12 @@ struct SceneObject {
   std::string name;      ///< unique, e.g. "couch_table"
   std::string type;      ///< "table", "chair", "drawer", "small_object", "stair", "door", ...
   Point3d min{0, 0, 0};  ///< axis-aligned 3D bounds (a stair's bounds reach below the floor)
-  Point3d max{0, 0, 0};
+  Point3d max{0, 0, 0};  ///< the upper corner of the bounds
   std::vector<PrimitiveRef> parts;  ///< the primitives it is made of (holes for a stair)
 
+  /// The centre of its bounds.
   [[nodiscard]] Point3d center() const { return (min + max) / 2; }
+  /// True when `p` is one of its parts.
   [[nodiscard]] bool contains(const PrimitiveRef& p) const {
     for (const auto& q : parts)
       if (q == p) return true;
@@ -49,21 +51,22 @@ struct SceneObject {
 /// A true plane n . p + d = 0 (unit normal) and the convex region of it that exists, as a
 /// polygon of 3D vertices.
 struct ScenePlane {
-  std::string name;
-  Point3d normal{0, 0, 1};
-  double d{0};
-  std::vector<Point3d> outline;
+  std::string name;              ///< e.g. "counter_top"
+  Point3d normal{0, 0, 1};       ///< unit normal
+  double d{0};                   ///< n . p + d = 0 on the plane
+  std::vector<Point3d> outline;  ///< the plane's labelled region, a convex outline
 
+  /// The signed distance of `p` from the plane (m).
   [[nodiscard]] double signed_distance(const Point3d& p) const { return normal.dot(p) + d; }
 };
 
 /// A built-in world with its ground truth.
 struct Scene {
-  World world;
-  std::vector<SceneObject> objects;
-  std::vector<ScenePlane> planes;  ///< filled where a world defines them (kitchen)
-  Pose2d start{0, 0, 0};           ///< a collision-free start pose for a robot of radius 0.3 m
-  std::vector<Point2d> tour;       ///< collision-free waypoints from the start (may be empty)
+  World world;                       ///< walls, objects, doors, ...
+  std::vector<SceneObject> objects;  ///< the named objects and their true bounds
+  std::vector<ScenePlane> planes;    ///< filled where a world defines them (kitchen)
+  Pose2d start{0, 0, 0};             ///< a collision-free start pose for a robot of radius 0.3 m
+  std::vector<Point2d> tour;         ///< collision-free waypoints from the start (may be empty)
 
   /// The object called `name`; throws invalid_argument when there is none.
   [[nodiscard]] const SceneObject& object(std::string_view name) const {

@@ -1,8 +1,10 @@
 #pragma once
 // Helpers shared by the PCD and PLY readers and writers: whole-file reads and writes, the
-// io_error message format, little-endian typed values, and text numbers that round-trip.
+// io_error message format, little-endian typed values, text numbers that round-trip, and the
+// checks a reader makes before it allocates a cloud and before it returns one.
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <charconv>
 #include <cmath>
@@ -18,8 +20,10 @@
 #include <type_traits>
 #include <vector>
 
+#include "rangenav/core/cloud.hpp"
 #include "rangenav/core/error.hpp"
 #include "rangenav/io/line_reader.hpp"
+#include "rangenav/io/reader_limits.hpp"
 
 namespace rangenav::io {
 
@@ -44,8 +48,10 @@ namespace rangenav::io::detail {
   throw io_error(msg);
 }
 
-/// The whole file in one read (binary bodies are then decoded from memory).
-inline std::string read_whole_file(std::string_view format, const std::filesystem::path& path) {
+/// The whole file in one read (binary bodies are then decoded from memory); a file larger than
+/// `max_bytes` raises io_error before anything is allocated.
+inline std::string read_whole_file(std::string_view format, const std::filesystem::path& path,
+                                   std::size_t max_bytes = ReaderLimits{}.max_bytes) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) throw_io(format, path, 0, "is a directory");
   std::ifstream in(path, std::ios::binary);
@@ -53,6 +59,9 @@ inline std::string read_whole_file(std::string_view format, const std::filesyste
   in.seekg(0, std::ios::end);
   const std::streamoff size = in.tellg();
   if (size < 0) throw_io(format, path, 0, "cannot read file");
+  if (static_cast<std::uintmax_t>(size) > max_bytes)
+    throw_io(format, path, 0,
+             exceeds_limit("file size", static_cast<std::size_t>(size), "max_bytes", max_bytes));
   in.seekg(0, std::ios::beg);
   std::string bytes(static_cast<std::size_t>(size), '\0');
   if (size > 0 && !in.read(bytes.data(), size)) throw_io(format, path, 0, "cannot read file");
@@ -211,6 +220,58 @@ std::uint8_t saturate_u8(T v) {
     if (v >= T(255)) return 255;
     return static_cast<std::uint8_t>(v);
   }
+}
+
+// ---- limits and finiteness ------------------------------------------------------------------
+
+/// Bytes a Cloud<3, Scalar> holds per point with the given attributes.
+template <class Scalar>
+constexpr std::size_t cloud_bytes_per_point(bool intensities, bool colors, bool normals) {
+  using P = typename Cloud<3, Scalar>::point_type;
+  return sizeof(P) + (intensities ? sizeof(float) : 0) + (colors ? sizeof(Rgba) : 0) +
+         (normals ? sizeof(P) : 0);
+}
+
+/// Throws io_error (naming `line` of the header, 0 for none) unless a cloud of `points` points of
+/// `bytes_per_point` bytes fits the limits; called before the cloud is allocated.
+inline void check_cloud_size(std::string_view format, const std::filesystem::path& path,
+                             std::size_t line, std::size_t points, std::size_t bytes_per_point,
+                             const ReaderLimits& limits) {
+  if (points > limits.max_points)
+    throw_io(format, path, line,
+             exceeds_limit("point count", points, "max_points", limits.max_points));
+  std::size_t bytes = 0;
+  if (!checked_mul(points, bytes_per_point, bytes) || bytes > limits.max_bytes)
+    throw_io(format, path, line,
+             "a cloud of " + std::to_string(points) + " points of " +
+                 std::to_string(bytes_per_point) +
+                 " bytes exceeds ReaderLimits::max_bytes = " + std::to_string(limits.max_bytes));
+}
+
+/// Throws io_error naming the point and field when a coordinate, normal or intensity of `cloud`
+/// is infinite (a value beyond Scalar's range reads as infinite). NaN is kept: it marks a missing
+/// point (PCL's convention for organised clouds) or an unknown normal.
+template <class Scalar>
+void require_no_infinity(std::string_view format, const std::filesystem::path& path,
+                         const Cloud<3, Scalar>& cloud) {
+  const auto fail = [&](std::size_t i, std::string_view field, double value) {
+    throw_io(format, path, 0,
+             "point " + std::to_string(i) + ": " + std::string(field) + " = " +
+                 (value > 0 ? "inf" : "-inf") +
+                 " is not finite (a value beyond the range of the cloud's scalar type?)");
+  };
+  static constexpr std::array<std::string_view, 3> axes{"x", "y", "z"};
+  static constexpr std::array<std::string_view, 3> normal_axes{"normal_x", "normal_y", "normal_z"};
+  for (std::size_t i = 0; i < cloud.points.size(); ++i)
+    for (Eigen::Index k = 0; k < 3; ++k)
+      if (std::isinf(cloud.points[i][k]))
+        fail(i, axes[static_cast<std::size_t>(k)], double(cloud.points[i][k]));
+  for (std::size_t i = 0; i < cloud.normals.size(); ++i)
+    for (Eigen::Index k = 0; k < 3; ++k)
+      if (std::isinf(cloud.normals[i][k]))
+        fail(i, normal_axes[static_cast<std::size_t>(k)], double(cloud.normals[i][k]));
+  for (std::size_t i = 0; i < cloud.intensities.size(); ++i)
+    if (std::isinf(cloud.intensities[i])) fail(i, "intensity", double(cloud.intensities[i]));
 }
 
 // ---- text -----------------------------------------------------------------------------------

@@ -23,6 +23,9 @@ namespace rangenav::io::detail {
 inline constexpr std::size_t lzf_max_offset = std::size_t{1} << 13;  // 8192
 inline constexpr std::size_t lzf_max_literal = 32;
 inline constexpr std::size_t lzf_max_match = 7 + 255 + 2;  // 264
+/// The largest output / input ratio of any LZF stream: a 3-byte back reference copies 264 bytes
+/// (literal runs and 2-byte references expand less).
+inline constexpr std::size_t lzf_max_expansion = lzf_max_match / 3;  // 88
 
 /// Appends the LZF compression of in[0, n) to out (cleared first). Output is at most
 /// n + n / 32 + 1 bytes; an empty input gives an empty output.

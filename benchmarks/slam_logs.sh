@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# Hold-out evaluation of the 2D SLAM on the four corrected logs of ../shared/data/carmen_corrected:
+# each log is turned into a SLAM input with ../shared/tools/noisy_log.py (its real scans, a
+# drifting synthetic odometry; seeds 1-3, noise scale 1 and 2), mapped by 03_slam_carmen with its
+# defaults, and scored by ../shared/tools/eval_traj.py against the corrected poses.
+#
+#   benchmarks/slam_logs.sh [BUILD_DIR] [-- extra 03_slam_carmen flags]    (from the repo root)
+#
+# Prints one row per run and the goals of issue 19: loop_m <= 0.10 m, consistency_mm <=
+# 1.05 x reference_consistency_mm, no non-finite pose. Needs python3; BUILD_DIR defaults to
+# build/release (build the target 03_slam_carmen there first).
+set -euo pipefail
+
+build=${1:-build/release}
+shift || true
+[[ ${1:-} == "--" ]] && shift
+extra=("$@")
+slam="$build/examples/03_slam_carmen"
+data=${RANGENAV_DATA_DIR:-../shared/data}
+tools=$(dirname "$data")/tools
+[[ -x $slam ]] || { echo "no $slam: cmake --build $build --target 03_slam_carmen" >&2; exit 1; }
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+printf '%-16s %4s %5s %6s %8s %9s %9s %6s %9s %6s %s\n' log seed scale scans loop_m \
+  cons_mm ref_mm ratio nonfinite loops scans/s
+fail=0
+for name in csail intel freiburg-101 freiburg-079; do
+  src="$data/carmen_corrected/$name-corrected.log.gz"
+  [[ -f $src ]] || { echo "missing $src" >&2; exit 1; }
+  for scale in 1 2; do
+    for seed in 1 2 3; do
+      base="$work/$name.$seed.$scale"
+      python3 "$tools/noisy_log.py" "$src" "$base.log" "$base.truth" --seed "$seed" \
+        --scale "$scale" >/dev/null
+      json=$("$slam" "$base.log" --out "$base" "${extra[@]}" | tail -n 1)
+      score=$(python3 "$tools/eval_traj.py" "$base.truth" "$base/trajectory.txt" --log "$base.log")
+      row=$(python3 - "$json" "$score" "$name" "$seed" "$scale" <<'EOF'
+import json, sys
+run, s = json.loads(sys.argv[1]), json.loads(sys.argv[2])
+name, seed, scale = sys.argv[3:6]
+ratio = s["consistency_mm"] / s["reference_consistency_mm"]
+ok = s["loop_m"] <= 0.10 and ratio <= 1.05 and s["nonfinite"] == 0
+print("%-16s %4s %5s %6d %8.4f %9.2f %9.2f %6.3f %9d %6d %9.0f %s" % (
+    name, seed, scale, run["scans"], s["loop_m"], s["consistency_mm"],
+    s["reference_consistency_mm"], ratio, s["nonfinite"], run["loop_closures"],
+    run["scans_per_second"], "" if ok else "FAIL"))
+EOF
+)
+      echo "$row"
+      [[ $row == *FAIL ]] && fail=$((fail + 1))
+    done
+  done
+done
+echo "runs missing a goal: $fail of 24"

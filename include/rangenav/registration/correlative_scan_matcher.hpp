@@ -1,0 +1,341 @@
+#pragma once
+// Branch-and-bound correlative scan matching over a multi-resolution grid (Olson 2009, "Real-time
+// correlative scan matching"; Hess, Kohler, Rapp, Andor 2016, "Real-time loop closure in 2D LIDAR
+// SLAM", §V): the global search that gives loop closure its coarse alignment.
+//
+// The model (a submap's points) is rasterised into a likelihood grid of cell size r: a cell's value
+// is exp(-d² / 2σ²), d the distance from the cell's centre to the nearest model point (Olson's
+// rasterised Gaussian cost). The score of a pose ξ = (x, y, θ) of the scan points h_k is Hess et
+// al.'s Eq. (9), the mean grid value at the transformed points,
+//   score(ξ) = 1/K Σ_k M_nearest(T_ξ h_k).
+// The search covers a window of ±W_x, ±W_y around an initial pose (in steps of r) and ±W_θ (in
+// steps of δθ, Eq. (7): δθ = arccos(1 − r² / (2 d_max²)), d_max the farthest scan point, so that
+// one angular step moves no point by more than one cell). Exhaustive search of that window is
+// Eq. (10); branch and bound (Algorithm 3) finds the same maximum: a node of height h stands for
+// the 2^h × 2^h translations starting at its offset, and its bound (Eq. (15)) is the score on the
+// precomputed grid
+//   M_precomp^h(x, y) = max { M(x', y') : x' ∈ [x, x + 2^h), y' ∈ [y, y + 2^h) }    (Eq. (14))
+// which is ≥ the score of every translation it covers. Nodes are expanded depth-first, best bound
+// first (the greedy order of §V.C), and pruned once their bound cannot beat the best leaf found
+// (or `min_score`). The precomputed grids come from the one below by a 2 × 2 max of offset
+// 2^(h-1), exact and O(cells) per level.
+//
+// The grid is two-dimensional only: 3D loop closures are verified by ICP alone.
+
+#include <algorithm>
+#include <cmath>
+#include <concepts>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "rangenav/core/error.hpp"
+#include "rangenav/core/types.hpp"
+
+namespace rangenav {
+
+/// Parameters of the correlative matcher's grid.
+template <std::floating_point Scalar = double>
+struct CorrelativeScanMatcherParams {
+  /// Cell size r of the finest grid (m). The match only has to land in the basin of the ICP
+  /// that refines it (a pairing distance of tens of cm), so a coarser cell than Hess et al.'s
+  /// 5 cm is enough and makes the grids four times smaller.
+  Scalar resolution = Scalar(0.1);
+  /// σ of the likelihood exp(-d² / 2σ²) (m): the spread of a wall's points in the grid, i.e.
+  /// the sensor noise plus half a cell of rasterisation; at σ = r a point half a cell off a
+  /// wall still scores 0.88, one a cell and a half off 0.32.
+  Scalar sigma = Scalar(0.1);
+  /// Heights of precomputed grids (Hess et al. use 7: a root node covers 2^6 = 64 cells).
+  int levels = 7;
+
+  /// Throws invalid_argument naming the first parameter out of range.
+  void validate() const {
+    constexpr std::string_view where = "CorrelativeScanMatcherParams";
+    detail::require_positive(where, "resolution", resolution);
+    detail::require_positive(where, "sigma", sigma);
+    if (levels < 1 || levels > 16)
+      detail::throw_invalid_argument(where, "levels", levels, "must be in [1, 16]");
+  }
+};
+
+/// The region searched around an initial pose: ±linear in x and y (m), ±angular (rad).
+template <std::floating_point Scalar = double>
+struct SearchWindow {
+  Scalar linear = Scalar(1);     ///< m, half-width in x and in y
+  Scalar angular = Scalar(0.5);  ///< rad, half-width in θ
+};
+
+/// A region of translations a search leaves out: those within `radius` (m) of `center`'s.
+template <std::floating_point Scalar = double>
+struct SearchExclusion {
+  Transform<2, Scalar> center = Transform<2, Scalar>::Identity();  ///< its translation counts
+  Scalar radius = 0;                                               ///< m
+};
+
+/// The best pose found and its score (Eq. (9), in [0, 1]).
+template <std::floating_point Scalar = double>
+struct CorrelativeMatch {
+  Transform<2, Scalar> pose = Transform<2, Scalar>::Identity();  ///< scan -> model frame
+  Scalar score = 0;        ///< Eq. (9), mean likelihood in [0, 1]
+  std::size_t points = 0;  ///< scan points scored (one per grid cell)
+};
+
+/// A likelihood grid of model points with its precomputed max grids; match() searches it.
+template <std::floating_point Scalar = double>
+class CorrelativeScanMatcher {
+ public:
+  using point_type = Point<2, Scalar>;          ///< a point
+  using transform_type = Transform<2, Scalar>;  ///< a pose
+
+  /// Rasterises the finite points of `model` (in the model frame). Throws invalid_argument for
+  /// invalid parameters or a model without a finite point.
+  explicit CorrelativeScanMatcher(std::span<const point_type> model,
+                                  CorrelativeScanMatcherParams<Scalar> params = {})
+      : params_((params.validate(), params)) {
+    Scalar lo_x = std::numeric_limits<Scalar>::infinity(), lo_y = lo_x, hi_x = -lo_x, hi_y = -lo_x;
+    for (const auto& p : model)
+      if (p.allFinite()) {
+        lo_x = std::min(lo_x, p.x());
+        lo_y = std::min(lo_y, p.y());
+        hi_x = std::max(hi_x, p.x());
+        hi_y = std::max(hi_y, p.y());
+      }
+    if (!(lo_x <= hi_x))
+      detail::throw_invalid("CorrelativeScanMatcher", "argument 'model' has no finite point");
+    const Scalar r = params_.resolution;
+    const int reach = static_cast<int>(std::ceil(3 * params_.sigma / r));  // 3σ of the kernel
+    origin_ = point_type(lo_x - Scalar(reach + 1) * r, lo_y - Scalar(reach + 1) * r);
+    width_ = static_cast<int>(std::ceil((hi_x - origin_.x()) / r)) + reach + 2;
+    height_ = static_cast<int>(std::ceil((hi_y - origin_.y()) / r)) + reach + 2;
+    pad_ = (1 << (params_.levels - 1)) - 1;
+    stride_ = width_ + pad_;
+    const std::size_t cells =
+        static_cast<std::size_t>(stride_) * static_cast<std::size_t>(height_ + pad_);
+    grids_.assign(static_cast<std::size_t>(params_.levels), std::vector<float>(cells, 0.0f));
+    // Level 0: the likelihood of the nearest model point, splatted over 3σ around each point.
+    auto& base = grids_[0];
+    const Scalar inv_two_sigma_sq = Scalar(1) / (2 * params_.sigma * params_.sigma);
+    for (const auto& p : model) {
+      if (!p.allFinite()) continue;
+      const int cx = static_cast<int>(std::floor((p.x() - origin_.x()) / r));
+      const int cy = static_cast<int>(std::floor((p.y() - origin_.y()) / r));
+      for (int y = cy - reach; y <= cy + reach; ++y)
+        for (int x = cx - reach; x <= cx + reach; ++x) {
+          const Scalar dx = origin_.x() + (Scalar(x) + Scalar(0.5)) * r - p.x();
+          const Scalar dy = origin_.y() + (Scalar(y) + Scalar(0.5)) * r - p.y();
+          float& cell = base[index(x, y)];
+          cell =
+              std::max(cell, static_cast<float>(std::exp(-(dx * dx + dy * dy) * inv_two_sigma_sq)));
+        }
+    }
+    // Eq. (14) level by level: the max over [x, x + 2^h) is that of [x, x + s) and [x + s,
+    // x + 2s) with s = 2^(h-1), both of level h - 1.
+    for (int h = 1; h < params_.levels; ++h) {
+      const int s = 1 << (h - 1);
+      const auto& below = grids_[static_cast<std::size_t>(h - 1)];
+      auto& level = grids_[static_cast<std::size_t>(h)];
+      for (int y = -pad_; y < height_; ++y)
+        for (int x = -pad_; x < width_; ++x) {
+          float m = below[index(x, y)];
+          if (x + s < width_) m = std::max(m, below[index(x + s, y)]);
+          if (y + s < height_) {
+            m = std::max(m, below[index(x, y + s)]);
+            if (x + s < width_) m = std::max(m, below[index(x + s, y + s)]);
+          }
+          level[index(x, y)] = m;
+        }
+    }
+  }
+
+  /// The pose of `scan` (points in the scan frame) with the highest score within `window`
+  /// around `initial` (scan -> model), if that score reaches `min_score`; translations in
+  /// `exclusion` are left out (a search for a second, distinct peak). The scan is thinned to
+  /// one point per grid cell first. Never throws on data: an empty or non-finite scan gives
+  /// no match. Not thread-safe (scratch buffers): one matcher per thread.
+  [[nodiscard]] std::optional<CorrelativeMatch<Scalar>> match(
+      std::span<const point_type> scan, const transform_type& initial,
+      const SearchWindow<Scalar>& window, Scalar min_score,
+      const std::optional<SearchExclusion<Scalar>>& exclusion = std::nullopt) const {
+    const Scalar r = params_.resolution;
+    thin(scan);
+    if (points_.empty() || !initial.matrix().allFinite() || !(window.linear >= 0) ||
+        !(window.angular >= 0))
+      return std::nullopt;
+    // Eq. (7) with d_max the 90 % quantile of the points' ranges instead of the farthest: one
+    // far reading would otherwise set the step for all, while a step moves 90 % of the points
+    // by at most a cell (and the refining ICP absorbs the rest); at least a tenth of a degree.
+    ranges_.clear();
+    for (const auto& p : points_)
+      ranges_.push_back(p.norm());
+    const auto q = ranges_.begin() + static_cast<std::ptrdiff_t>(ranges_.size() * 9 / 10);
+    std::nth_element(ranges_.begin(), q, ranges_.end());
+    const Scalar d_max = *q;
+    const Scalar step =
+        std::max(std::acos(std::clamp(1 - r * r / (2 * std::max(d_max * d_max, r * r)), Scalar(-1),
+                                      Scalar(1))),
+                 Scalar(std::numbers::pi_v<Scalar> / 1800));
+    const int angles =
+        static_cast<int>(std::ceil(std::min(window.angular, std::numbers::pi_v<Scalar>) / step));
+    const int wx = static_cast<int>(std::ceil(window.linear / r));
+    const Scalar theta0 = std::atan2(initial.linear()(1, 0), initial.linear()(0, 0));
+    const point_type t0 = initial.translation();
+    exclusion_ = exclusion;
+    if (exclusion_) {  // in cell offsets from t0
+      exclusion_->center.translation() = (exclusion_->center.translation() - t0) / r;
+      exclusion_->radius /= r;
+    }
+
+    // Discretised scans, one per angle (Hess et al.'s precomputed rotated scans).
+    const std::size_t n = points_.size();
+    cells_.resize(static_cast<std::size_t>(2 * angles + 1) * n);
+    for (int a = -angles; a <= angles; ++a) {
+      const Scalar theta = theta0 + Scalar(a) * step;
+      const Scalar c = std::cos(theta), s = std::sin(theta);
+      for (std::size_t k = 0; k < n; ++k) {
+        const point_type& p = points_[k];
+        const Scalar x = c * p.x() - s * p.y() + t0.x(), y = s * p.x() + c * p.y() + t0.y();
+        cells_[static_cast<std::size_t>(a + angles) * n + k] = {
+            static_cast<int>(std::floor((x - origin_.x()) / r)),
+            static_cast<int>(std::floor((y - origin_.y()) / r))};
+      }
+    }
+    const int top = params_.levels - 1;
+    std::vector<Candidate> roots;
+    for (int a = -angles; a <= angles; ++a)
+      for (int x = -wx; x <= wx; x += 1 << top)
+        for (int y = -wx; y <= wx; y += 1 << top)
+          roots.push_back({a + angles, x, y, score(top, a + angles, x, y)});
+    std::sort(roots.begin(), roots.end(), by_score);
+    Candidate best{0, 0, 0, static_cast<float>(min_score) * static_cast<float>(n)};
+    bool found = false;
+    search(roots, top, wx, best, found);
+    if (!found) return std::nullopt;
+    CorrelativeMatch<Scalar> m;
+    const Scalar theta = theta0 + Scalar(best.angle - angles) * step;
+    m.pose = make_transform2(t0.x() + Scalar(best.x) * r, t0.y() + Scalar(best.y) * r, theta);
+    m.score = static_cast<Scalar>(best.score) / static_cast<Scalar>(n);
+    m.points = n;
+    return m;
+  }
+
+  /// Eq. (9) at one pose: the mean likelihood of `scan`'s points (thinned as by match()) placed
+  /// by `pose` (scan -> model); 0 for a scan without a finite point.
+  [[nodiscard]] Scalar score(std::span<const point_type> scan, const transform_type& pose) const {
+    thin(scan);
+    if (points_.empty()) return 0;
+    Scalar sum = 0;
+    for (const auto& p : points_)
+      sum += likelihood(pose * p);
+    return sum / static_cast<Scalar>(points_.size());
+  }
+
+  /// The likelihood (level 0) at a point of the model frame; 0 outside the grid.
+  [[nodiscard]] Scalar likelihood(const point_type& p) const {
+    return value(0, static_cast<int>(std::floor((p.x() - origin_.x()) / params_.resolution)),
+                 static_cast<int>(std::floor((p.y() - origin_.y()) / params_.resolution)));
+  }
+  [[nodiscard]] const CorrelativeScanMatcherParams<Scalar>& params() const { return params_; }
+  /// Bytes held by the grids.
+  [[nodiscard]] std::size_t memory_bytes() const {
+    return grids_.size() * (grids_.empty() ? 0 : grids_[0].size() * sizeof(float));
+  }
+
+ private:
+  struct Candidate {
+    int angle, x, y;  ///< angle index, cell offsets
+    float score;      ///< summed bound (the score at height 0)
+  };
+  struct Cell {
+    int x, y;
+  };
+  static bool by_score(const Candidate& a, const Candidate& b) { return a.score > b.score; }
+
+  [[nodiscard]] std::size_t index(int x, int y) const {
+    return static_cast<std::size_t>(y + pad_) * static_cast<std::size_t>(stride_) +
+           static_cast<std::size_t>(x + pad_);
+  }
+  [[nodiscard]] float value(int level, int x, int y) const {
+    if (x < -pad_ || y < -pad_ || x >= width_ || y >= height_) return 0.0f;
+    return grids_[static_cast<std::size_t>(level)][index(x, y)];
+  }
+  // Eq. (15): the summed precomputed grid of height h at the scan's cells shifted by (x, y).
+  [[nodiscard]] float score(int h, int angle, int x, int y) const {
+    const std::size_t n = points_.size();
+    const Cell* c = cells_.data() + static_cast<std::size_t>(angle) * n;
+    float sum = 0;
+    for (std::size_t k = 0; k < n; ++k)
+      sum += value(h, c[k].x + x, c[k].y + y);
+    return sum;
+  }
+  // Algorithm 3 (depth-first branch and bound, best child first).
+  void search(std::vector<Candidate>& candidates, int h, int w, Candidate& best,
+              bool& found) const {
+    for (const Candidate& c : candidates) {
+      if (c.score <= best.score) break;  // sorted: nothing later can beat the best
+      if (excluded(c, h)) continue;
+      if (h == 0) {
+        best = c;
+        found = true;
+        continue;
+      }
+      const int s = 1 << (h - 1);
+      std::vector<Candidate> children;
+      children.reserve(4);
+      for (int dx = 0; dx < 2; ++dx)
+        for (int dy = 0; dy < 2; ++dy) {
+          const int x = c.x + dx * s, y = c.y + dy * s;
+          if (x > w || y > w) continue;
+          children.push_back({c.angle, x, y, score(h - 1, c.angle, x, y)});
+        }
+      std::sort(children.begin(), children.end(), by_score);
+      search(children, h - 1, w, best, found);
+    }
+  }
+  // Whether every translation of node c (height h) lies in the exclusion: the farthest corner
+  // of its square of offsets is within the radius.
+  [[nodiscard]] bool excluded(const Candidate& c, int h) const {
+    if (!exclusion_) return false;
+    const Scalar size = Scalar((1 << h) - 1);
+    const auto& e = exclusion_->center.translation();
+    const Scalar dx = std::max(std::abs(Scalar(c.x) - e.x()), std::abs(Scalar(c.x) + size - e.x()));
+    const Scalar dy = std::max(std::abs(Scalar(c.y) - e.y()), std::abs(Scalar(c.y) + size - e.y()));
+    return dx * dx + dy * dy < exclusion_->radius * exclusion_->radius;
+  }
+  // One point per finest cell of the scan frame (mutable scratch: match() is const).
+  void thin(std::span<const point_type> scan) const {
+    const Scalar r = params_.resolution;
+    keyed_.clear();
+    for (const auto& p : scan)
+      if (p.allFinite())
+        keyed_.push_back({static_cast<std::int64_t>(std::floor(p.x() / r)),
+                          static_cast<std::int64_t>(std::floor(p.y() / r)), p});
+    std::sort(keyed_.begin(), keyed_.end(), [](const Keyed& a, const Keyed& b) {
+      return a.cx < b.cx || (a.cx == b.cx && a.cy < b.cy);
+    });
+    points_.clear();
+    for (std::size_t i = 0; i < keyed_.size(); ++i)
+      if (i == 0 || keyed_[i].cx != keyed_[i - 1].cx || keyed_[i].cy != keyed_[i - 1].cy)
+        points_.push_back(keyed_[i].p);
+  }
+  struct Keyed {
+    std::int64_t cx, cy;
+    point_type p;
+  };
+
+  CorrelativeScanMatcherParams<Scalar> params_;
+  point_type origin_;  ///< model-frame corner of cell (0, 0)
+  int width_ = 0, height_ = 0, pad_ = 0, stride_ = 0;
+  std::vector<std::vector<float>> grids_;  ///< level h: Eq. (14), cells [-pad, size)
+  mutable std::vector<Keyed> keyed_;
+  mutable std::vector<point_type> points_;
+  mutable std::vector<Cell> cells_;
+  mutable std::vector<Scalar> ranges_;
+  mutable std::optional<SearchExclusion<Scalar>> exclusion_;  ///< in cell offsets
+};
+
+}  // namespace rangenav

@@ -1,0 +1,297 @@
+// Loop-closing SLAM against simulator truth: the correlative matcher (exact branch and bound,
+// ambiguity), the front end's uncertainty, the 2D loop closed with drifting odometry, a
+// look-alike place rejected, an all-invalid stretch of scans.
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "mapping/slam_scenes.hpp"
+#include "rangenav/mapping/incremental_mapper.hpp"
+#include "rangenav/mapping/loop_closing_mapper.hpp"
+#include "rangenav/mapping/pose_uncertainty.hpp"
+#include "rangenav/registration/correlative_scan_matcher.hpp"
+#include "rangenav/registration/point_to_plane_solver.hpp"
+#include "rangenav/search/kd_tree.hpp"
+#include "rangenav/sim/worlds.hpp"
+
+namespace {
+
+using rangenav::Point2d;
+using rangenav::Pose2d;
+using rangenav::Transform2d;
+
+std::vector<Point2d> points_of(const rangenav::LaserScan<double>& scan) {
+  return {scan.valid_points().begin(), scan.valid_points().end()};
+}
+
+// RMS position error of `estimate` against `truth`, both expressed relative to their first pose.
+double trajectory_error(const std::vector<Transform2d>& estimate,
+                        const std::vector<Pose2d>& truth) {
+  double sum = 0;
+  const Transform2d e0 = estimate.front().inverse(Eigen::Isometry);
+  const Pose2d t0 = truth.front();
+  for (std::size_t i = 0; i < estimate.size(); ++i) {
+    const Point2d e = (e0 * estimate[i]).translation();
+    const Point2d t = rangenav::relative(t0, truth[i]).position();
+    sum += (e - t).squaredNorm();
+  }
+  return std::sqrt(sum / static_cast<double>(estimate.size()));
+}
+
+// Mean distance of the scans placed at the estimated poses to the same scans placed at the true
+// poses (every 10th scan, both relative to the first pose): the map's error.
+double map_error(const std::vector<Transform2d>& estimate,
+                 const rangenav::test::SimulatedRun& run) {
+  std::vector<Point2d> truth_points;
+  const Pose2d t0 = run.truth.front();
+  const Transform2d e0 = estimate.front().inverse(Eigen::Isometry);
+  for (std::size_t i = 0; i < run.scans.size(); i += 10)
+    for (const auto& p : run.scans[i].valid_points())
+      truth_points.push_back(rangenav::relative(t0, run.truth[i]).to_isometry() * p);
+  const rangenav::KdTree<2, double> tree(truth_points);
+  std::vector<rangenav::Neighbor<double>> nn;
+  double sum = 0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < run.scans.size(); i += 10)
+    for (const auto& p : run.scans[i].valid_points()) {
+      tree.knn(e0 * estimate[i] * p, 1, nn);
+      sum += std::sqrt(nn[0].distance_sq);
+      ++n;
+    }
+  return sum / static_cast<double>(n);
+}
+
+}  // namespace
+
+TEST_CASE("CorrelativeScanMatcher finds the true pose, as the exhaustive search does",
+          "[mapping][slam]") {
+  const auto world = rangenav::test::ring_corridor();
+  const rangenav::sim::LaserScanner2D scanner;
+  std::mt19937 rng(3);
+  // Model: a scan from (4, 1); data: a scan from (5.2, 1.3, 10°), both in their robot frames.
+  const Pose2d model_pose{4.0, 1.0, 0.0}, data_pose{5.2, 1.3, 0.17};
+  const auto model = points_of(scanner.scan(world, model_pose, rng));
+  const auto data = points_of(scanner.scan(world, data_pose, rng));
+  const Transform2d truth = rangenav::relative(model_pose, data_pose).to_isometry();
+  // Start 0.7 m and 9° off the truth; search ±1 m, ±15°.
+  const Transform2d initial = truth * rangenav::make_transform2(0.5, -0.5, -0.16);
+  const rangenav::SearchWindow<double> window{1.0, 0.26};
+
+  const rangenav::CorrelativeScanMatcher<double> matcher(model);
+  const auto match = matcher.match(data, initial, window, 0.3);
+  REQUIRE(match);
+  const Transform2d error = truth.inverse(Eigen::Isometry) * match->pose;
+  CHECK(error.translation().norm() < 0.1);  // one cell
+  CHECK(std::abs(rangenav::rotation_angle(error)) < 0.01);
+  CHECK(match->score > 0.6);
+
+  // One level is Eq. (10), the exhaustive search: branch and bound must find its maximum.
+  rangenav::CorrelativeScanMatcherParams<double> flat;
+  flat.levels = 1;
+  const rangenav::CorrelativeScanMatcher<double> exhaustive(model, flat);
+  const auto brute = exhaustive.match(data, initial, window, 0.3);
+  REQUIRE(brute);
+  CHECK(match->score == Approx(brute->score).epsilon(1e-5));
+
+  // Nothing scores above the best: a search demanding more finds nothing.
+  CHECK_FALSE(matcher.match(data, initial, window, match->score + 1e-3));
+}
+
+TEST_CASE("CorrelativeScanMatcher sees a look-alike place as a second peak", "[mapping][slam]") {
+  // The office corridor's doors repeat every 5 m and the corridor is symmetric: seen from the
+  // corridor's centre line, x and x + 5 look alike.
+  const auto scene = rangenav::sim::office_corridor();
+  rangenav::sim::LaserScannerParams short_range;
+  short_range.geometry = rangenav::ScanGeometry<double>::from_fov(
+      rangenav::deg_to_rad(270.0), rangenav::deg_to_rad(0.5), 0.05, 4.0);
+  const rangenav::sim::LaserScanner2D scanner(short_range);
+  std::mt19937 rng(5);
+  const Pose2d model_pose{7.5, 1.0, 0.0}, data_pose{12.5, 1.0, 0.0};
+  const auto model = points_of(scanner.scan(scene.world, model_pose, rng));
+  const auto data = points_of(scanner.scan(scene.world, data_pose, rng));
+  const rangenav::CorrelativeScanMatcher<double> matcher(model);
+  // Predicted 2.5 m off; a window of ±3 m holds both x = 7.5 (the look-alike, in the model's
+  // frame offset 0) and nothing else.
+  const Transform2d predicted = rangenav::make_transform2(2.5, 0.0, 0.0);
+  const rangenav::SearchWindow<double> window{3.0, 0.2};
+  const auto best = matcher.match(data, predicted, window, 0.3);
+  REQUIRE(best);
+  // Its second peak, 1 m away or more, scores nearly as well: the loop closer rejects such a match.
+  const auto second = matcher.match(data, predicted, window, 0.8 * best->score,
+                                    rangenav::SearchExclusion<double>{best->pose, 1.0});
+  CHECK(second);
+}
+
+TEST_CASE("Registration information: a corridor leaves its axis to the odometry",
+          "[mapping][slam]") {
+  // Two long parallel walls: the point-to-line pairs constrain y and θ, not x.
+  std::vector<rangenav::Correspondence<2, double>> pairs;
+  for (int i = -50; i <= 50; ++i)
+    for (double y : {-1.0, 1.0})
+      pairs.push_back({Point2d(0.1 * i, y), Point2d(0.1 * i, y), 0.0, 0, 0});
+  const auto info = rangenav::registration_information<2, double>(
+      pairs, Transform2d::Identity(),
+      [](const rangenav::Correspondence<2, double>& c) {
+        return Point2d(0, c.model.y() > 0 ? 1.0 : -1.0);
+      },
+      0.01);
+  CHECK(info(0, 0) == Approx(0.0).margin(1e-9));
+  CHECK(info(1, 1) == Approx(202 / (0.01 * 0.01)));
+  // Fused with odometry that says x = 0.3 and y = 0.05 (σ 0.1 m): x follows the odometry,
+  // y stays with the scan.
+  rangenav::lie::PoseMatrix<2, double> odo = rangenav::lie::PoseMatrix<2, double>::Zero();
+  odo.diagonal() << 100, 100, 100;
+  const auto fused = rangenav::fuse<2, double>(Transform2d::Identity(), info,
+                                               rangenav::make_transform2(0.3, 0.05, 0.0), odo);
+  CHECK(fused.pose.translation().x() == Approx(0.3).margin(1e-6));
+  CHECK(std::abs(fused.pose.translation().y()) < 1e-3);
+}
+
+TEST_CASE("LoopClosingMapper closes the ring with drifting odometry", "[mapping][slam]") {
+  const auto run = rangenav::test::ring_run();
+  const auto map_and_score = [&](bool loops) {
+    rangenav::LoopClosureParams<double> lp;
+    lp.enabled = loops;
+    rangenav::LaserSlam<double> slam(rangenav::laser_slam_params<double>(), lp);
+    for (std::size_t i = 0; i < run.scans.size(); ++i)
+      slam.process(run.scans[i], run.odometry[i].to_isometry());
+    slam.finish();
+    const auto trajectory = slam.trajectory();
+    for (const auto& t : trajectory)
+      REQUIRE(t.matrix().allFinite());
+    return std::tuple{trajectory_error(trajectory, run.truth), map_error(trajectory, run),
+                      slam.loop_closures().size()};
+  };
+  std::vector<Transform2d> odometry;
+  for (const auto& o : run.odometry)
+    odometry.push_back(o.to_isometry());
+  const double odometry_error = trajectory_error(odometry, run.truth);
+  const auto [open_error, open_map, open_loops] = map_and_score(false);
+  const auto [closed_error, closed_map, closed_loops] = map_and_score(true);
+  INFO("odometry " << odometry_error << " m, front end " << open_error << " m (map " << open_map
+                   << " m), with loop closure " << closed_error << " m (map " << closed_map
+                   << " m), " << closed_loops << " loop closures");
+  CHECK(open_loops == 0);
+  CHECK(closed_loops > 0);
+  CHECK(closed_error < 0.1);
+  CHECK(closed_map < 0.05);
+  CHECK(closed_error < open_error);
+}
+
+TEST_CASE("LoopClosingMapper keeps finite poses through a stretch of all-invalid scans",
+          "[mapping][slam]") {
+  auto run = rangenav::test::ring_run();
+  const std::size_t first = 100, last = 160;
+  for (std::size_t i = first; i < last; ++i) {
+    const auto& s = run.scans[i];
+    run.scans[i] = rangenav::LaserScan<double>(
+        s.geometry(),
+        std::vector<double>(s.ranges().size(), std::numeric_limits<double>::quiet_NaN()), {}, 0.0);
+  }
+  rangenav::LaserSlam<double> slam;
+  for (std::size_t i = 0; i < run.scans.size(); ++i) {
+    const auto u = slam.process(run.scans[i], run.odometry[i].to_isometry());
+    REQUIRE(u.pose.matrix().allFinite());
+  }
+  slam.finish();
+  const auto trajectory = slam.trajectory();
+  for (const auto& t : trajectory)
+    REQUIRE(t.matrix().allFinite());
+  // Through the gap the odometry carried the pose; with the loop closed the error stays small.
+  CHECK(trajectory_error(trajectory, run.truth) < 0.3);
+}
+
+TEST_CASE("LoopClosingMapper closes the ring in 3D with ICP-verified loops", "[mapping][slam]") {
+  // The ring driven with drifting planar odometry, seen by a 3D scanner; 6-DOF front end with
+  // point-to-plane ICP against the map's normals (the corridors leave their axes to odometry).
+  using PlaneIcp = rangenav::BasicIcp<3, double, rangenav::PointToPlaneSolver<double>,
+                                      rangenav::DecayingDistanceRejector<double>>;
+  const auto run = rangenav::test::ring_run();
+  const auto world = rangenav::test::ring_corridor();
+  std::mt19937 rng(9);
+  std::vector<std::vector<rangenav::Point3d>> clouds;
+  for (const auto& pose : run.truth)
+    clouds.push_back(rangenav::test::scan_3d(world, pose, rng));
+  const auto to3 = [](const Pose2d& p) {
+    rangenav::Transform3d t = rangenav::Transform3d::Identity();
+    t.linear() = Eigen::AngleAxisd(p.theta, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    t.translation() = rangenav::Point3d(p.x, p.y, 0);
+    return t;
+  };
+  const auto map_and_score = [&](bool loops) {
+    rangenav::IncrementalMapperParams<double> fp;
+    fp.voxel_size = 0.1;
+    fp.map.epsilon_d = 0.1;
+    rangenav::LoopClosureParams<double> lp;
+    lp.enabled = loops;
+    rangenav::LoopClosingMapper<3, double, PlaneIcp> slam(fp, lp);
+    for (std::size_t i = 0; i < clouds.size(); ++i)
+      slam.process(clouds[i], to3(run.odometry[i]));
+    slam.finish();
+    // Planar errors against the truth (first pose's frame), and the loop count.
+    std::vector<Transform2d> planar;
+    for (const auto& t : slam.trajectory()) {
+      REQUIRE(t.matrix().allFinite());
+      planar.push_back(rangenav::make_transform2(t.translation().x(), t.translation().y(),
+                                                 std::atan2(t(1, 0), t(0, 0))));
+    }
+    return std::tuple{trajectory_error(planar, run.truth), map_error(planar, run),
+                      slam.loop_closures().size()};
+  };
+  const auto [open_error, open_map, open_loops] = map_and_score(false);
+  const auto [closed_error, closed_map, closed_loops] = map_and_score(true);
+  INFO("front end " << open_error << " m (map " << open_map << " m), with loop closure "
+                    << closed_error << " m (map " << closed_map << " m), " << closed_loops
+                    << " loop closures");
+  CHECK(open_loops == 0);
+  CHECK(closed_loops > 0);
+  CHECK(closed_error < open_error);
+  CHECK(closed_error < 0.15);
+}
+
+TEST_CASE("LoopClosingMapper accepts no loop at a look-alike place", "[mapping][slam]") {
+  // The office corridor's doors repeat every 5 m; a 4 m scanner sees one door at a time, so
+  // places 5 m apart look alike. Down the corridor and back with drifting odometry: every
+  // accepted loop closure must relate its two key frames as the truth does.
+  const auto scene = rangenav::sim::office_corridor();
+  rangenav::sim::LaserScannerParams short_range;
+  short_range.geometry = rangenav::ScanGeometry<double>::from_fov(
+      rangenav::deg_to_rad(270.0), rangenav::deg_to_rad(0.5), 0.05, 4.0);
+  const rangenav::sim::LaserScanner2D scanner(short_range);
+  std::mt19937 rng(4);
+  Pose2d pose{1.0, 1.0, 0.0}, odom = pose;
+  std::vector<Pose2d> truth;
+  rangenav::LaserSlam<double> slam;
+  std::vector<std::size_t> scan_of_node;
+  double travelled = 0;
+  for (const Point2d& goal : {Point2d(19, 1), Point2d(1, 1), Point2d(19, 1)})
+    for (int guard = 0; guard < 100000 && (goal - pose.position()).norm() > 0.05; ++guard) {
+      const double bearing =
+          rangenav::normalize_angle(std::atan2(goal.y() - pose.y, goal.x() - pose.x) - pose.theta);
+      const Pose2d step{std::abs(bearing) < 0.3 ? 0.05 : 0.0, 0.0, std::clamp(bearing, -0.1, 0.1)};
+      pose = rangenav::compose(pose, step);
+      odom = rangenav::compose(odom, {step.x * 1.03, 0.0, step.theta + 0.01 * step.x});
+      if ((travelled += step.x + 0.6 * std::abs(step.theta)) < 0.1) continue;
+      travelled = 0;
+      const auto u = slam.process(scanner.scan(scene.world, pose, rng), odom.to_isometry());
+      if (u.node) scan_of_node.push_back(truth.size());
+      truth.push_back(pose);
+    }
+  slam.finish();
+  for (const auto& t : slam.trajectory())
+    REQUIRE(t.matrix().allFinite());
+  CHECK(slam.loop_statistics().candidates > 0);
+  for (const auto& c : slam.loop_closures()) {
+    const Transform2d true_relative =
+        rangenav::relative(truth[scan_of_node[c.anchor]], truth[scan_of_node[c.node]])
+            .to_isometry();
+    const Transform2d error = true_relative.inverse(Eigen::Isometry) * c.relative;
+    INFO("loop " << c.anchor << " -> " << c.node);
+    CHECK(error.translation().norm() < 0.3);
+    CHECK(std::abs(rangenav::rotation_angle(error)) < 0.05);
+  }
+}
