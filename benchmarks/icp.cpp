@@ -136,7 +136,7 @@ const Pair3& bunny() {
   return pair;
 }
 
-constexpr double translation_eps = 1e-3;                           // m (small_gicp's default)
+constexpr double translation_eps = 1e-3;                         // m (small_gicp's default)
 constexpr double rotation_eps = 0.1 * std::numbers::pi / 180.0;  // rad (small_gicp's default)
 constexpr int max_iterations = 50;
 constexpr int neighbors = 10;
@@ -401,10 +401,9 @@ void BM_open3d_3d(benchmark::State& state, const Pair3& (*get)(), Method method)
       case Method::gicp:
         source.EstimateCovariances(knn);
         target.EstimateCovariances(knn);
-        r = reg::RegistrationGeneralizedICP(source, target, pair.max_distance,
-                                            Eigen::Matrix4d::Identity(),
-                                            reg::TransformationEstimationForGeneralizedICP(),
-                                            criteria);
+        r = reg::RegistrationGeneralizedICP(
+            source, target, pair.max_distance, Eigen::Matrix4d::Identity(),
+            reg::TransformationEstimationForGeneralizedICP(), criteria);
         break;
     }
     benchmark::DoNotOptimize(r);
@@ -427,12 +426,14 @@ class RatioReporter : public benchmark::ConsoleReporter {
   }
 
   void print_ratios() const {
-    std::printf("\nrangenav time / peer time, same input and criteria (below 1: rangenav faster;"
-                " real time for 2 threads, CPU time of the main thread for 1):\n");
+    std::printf(
+        "\nrangenav time / peer time, same input and criteria (below 1: rangenav faster;"
+        " real time for 2 threads, CPU time of the main thread for 1):\n");
     for (const char* data : {"kitti", "bunny"})
       for (const char* method : method_names)
         for (const char* threads : {"1", "2"}) {
-          const std::string ours = std::string("BM_rangenav_") + method + "_" + data + "/" + threads;
+          const std::string ours =
+              std::string("BM_rangenav_") + method + "_" + data + "/" + threads;
           const auto o = times_.find(ours);
           if (o == times_.end()) continue;
           const bool real = std::string(threads) != "1";
@@ -442,8 +443,8 @@ class RatioReporter : public benchmark::ConsoleReporter {
             if (p == times_.end()) continue;
             const double a = real ? o->second.first : o->second.second;
             const double b = real ? p->second.first : p->second.second;
-            std::printf("  %-9s %-6s %s thread(s)  vs %-10s  %8.3f ms / %8.3f ms = %.2f\n",
-                        method, data, threads, peer, a, b, a / b);
+            std::printf("  %-9s %-6s %s thread(s)  vs %-10s  %8.3f ms / %8.3f ms = %.2f\n", method,
+                        data, threads, peer, a, b, a / b);
           }
         }
     std::printf("\nrangenav 2-thread speed-up of the whole align call (real time):\n");

@@ -42,9 +42,12 @@ std::vector<Eigen::Vector3d> room(std::mt19937& rng, double noise) {
   for (int i = 0; i < 12000; ++i) {
     Eigen::Vector3d p(6 * u(rng) - 3, 4 * u(rng) - 2, 3 * u(rng));
     const int face = i % 6;
-    if (face < 2) p.x() = face == 0 ? -3 : 3;
-    else if (face < 4) p.y() = face == 2 ? -2 : 2;
-    else p.z() = face == 4 ? 0 : (p.x() > 0 && p.y() > 0 ? 0.8 : 3);  // a table in one corner
+    if (face < 2)
+      p.x() = face == 0 ? -3 : 3;
+    else if (face < 4)
+      p.y() = face == 2 ? -2 : 2;
+    else
+      p.z() = face == 4 ? 0 : (p.x() > 0 && p.y() > 0 ? 0.8 : 3);  // a table in one corner
     pts.push_back(p + Eigen::Vector3d(n(rng), n(rng), n(rng)));
   }
   return pts;
@@ -71,10 +74,10 @@ int main() {
   settings.max_correspondence_distance = 0.5;
   const auto scan = align(target2, source2, odometry, settings);
   const auto [scan_m, scan_deg] = error<2>(scan.transform, motion2);
-  std::printf("1. two scans: %s after %d iterations, fitness %.2f, rmse %.3f m; error %.4f m, "
-              "%.3f deg\n",
-              to_string(scan.reason).data(), scan.iterations, scan.fitness, scan.rmse, scan_m,
-              scan_deg);
+  std::printf(
+      "1. two scans: %s after %d iterations, fitness %.2f, rmse %.3f m; error %.4f m, "
+      "%.3f deg\n",
+      to_string(scan.reason).data(), scan.iterations, scan.fitness, scan.rmse, scan_m, scan_deg);
 
   // ---- 2. Which residual: point-to-point, point-to-plane, GICP ------------------------------
   // Two independent noisy samples of a room, 0.25 m and 8.6 degrees apart. Point-to-point pulls
@@ -93,8 +96,8 @@ int main() {
     settings.method = method;
     const auto r = align(target3, source3, Transform3d::Identity(), settings);
     const auto [m, deg] = error<3>(r.transform, motion3);
-    std::printf("2. room, %-14s %2d iterations, error %.4f m, %.3f deg\n",
-                to_string(method).data(), r.iterations, m, deg);
+    std::printf("2. room, %-14s %2d iterations, error %.4f m, %.3f deg\n", to_string(method).data(),
+                r.iterations, m, deg);
     if (method == RegistrationMethod::gicp) gicp_room_m = m;
   }
 
@@ -112,7 +115,8 @@ int main() {
   const Transform2d step = make_transform2(0.5, 0.05, 0.02);  // the truth: 0.5 m along the axis
   for (int i = 0; i < 2000; ++i) {
     corridor.emplace_back(along(rng), i % 2 == 0 ? -1.0 : 1.0);
-    corridor_moved.push_back(step.inverse(Eigen::Isometry) * Eigen::Vector2d(along(rng), i % 2 ? -1.0 : 1.0));
+    corridor_moved.push_back(step.inverse(Eigen::Isometry) *
+                             Eigen::Vector2d(along(rng), i % 2 ? -1.0 : 1.0));
   }
   settings.method = RegistrationMethod::point_to_plane;
   const auto blind = align(corridor, corridor_moved, Transform2d::Identity(), settings);
@@ -122,11 +126,11 @@ int main() {
   prior.information = Eigen::Vector3d(1 / 0.0025, 1 / 0.0025, 1 / 0.0012).asDiagonal();
   const auto guided = align(corridor, corridor_moved, Transform2d::Identity(), settings, prior);
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> weakest(*blind.information);
-  std::printf("3. corridor: along the axis the scans moved %.2f m, no prior %.2f m, with the "
-              "prior %.2f m; unobserved direction (x, y, theta) = (%.2f, %.2f, %.2f)\n",
-              step.translation().x(), blind.transform.translation().x(),
-              guided.transform.translation().x(), weakest.eigenvectors()(0, 0),
-              weakest.eigenvectors()(1, 0), weakest.eigenvectors()(2, 0));
+  std::printf(
+      "3. corridor: along the axis the scans moved %.2f m, no prior %.2f m, with the "
+      "prior %.2f m; unobserved direction (x, y, theta) = (%.2f, %.2f, %.2f)\n",
+      step.translation().x(), blind.transform.translation().x(), guided.transform.translation().x(),
+      weakest.eigenvectors()(0, 0), weakest.eigenvectors()(1, 0), weakest.eigenvectors()(2, 0));
 
   // ---- 4. Outliers and a robust kernel -------------------------------------------------------
   // A third of the scan is a moving object: a copy of part of the scene 0.3 m away. Least

@@ -44,8 +44,8 @@ TEST_CASE("PCA of a noisy 2D line: direction, normal and RMS distance", "[geomet
   // Uniform on [-5, 5]: variance 100 / 12.
   CHECK(fit.eigenvalues(1) == Approx(100.0 / 12).epsilon(0.03));
   // The same fit through an index map (the neighbour lists of normal estimation).
-  const auto by_index =
-      fit_pca<2, double>(pts.size(), [&](std::size_t i) -> const Eigen::Vector2d& { return pts[i]; });
+  const auto by_index = fit_pca<2, double>(
+      pts.size(), [&](std::size_t i) -> const Eigen::Vector2d& { return pts[i]; });
   CHECK(by_index.covariance == fit.covariance);
 }
 

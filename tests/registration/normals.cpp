@@ -1,5 +1,5 @@
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -38,7 +38,8 @@ double edge_distance(const Eigen::Vector3d& p) {
 
 }  // namespace
 
-TEST_CASE("estimate_normals finds the faces' normals, turned towards the origin", "[registration]") {
+TEST_CASE("estimate_normals finds the faces' normals, turned towards the origin",
+          "[registration]") {
   std::mt19937 rng(2);
   std::vector<Eigen::Vector3d> pts, truth;
   box(rng, pts, truth);
@@ -75,7 +76,8 @@ TEST_CASE("estimate_covariances: eps across the surface, 1 along it (Segal et al
   }
 }
 
-TEST_CASE("normals and covariances of a cloud follow its order; degenerate spots", "[registration]") {
+TEST_CASE("normals and covariances of a cloud follow its order; degenerate spots",
+          "[registration]") {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<Eigen::Vector2d> line;
   for (int i = 0; i < 30; ++i)
@@ -83,8 +85,8 @@ TEST_CASE("normals and covariances of a cloud follow its order; degenerate spots
   line.insert(line.begin() + 5, Eigen::Vector2d(nan, 0));
   const auto normals = estimate_normals(line, 5);
   REQUIRE(normals.size() == line.size());
-  CHECK(normals[5].isZero(0));                            // the NaN point
-  CHECK(normals[0].isApprox(Eigen::Vector2d(0, -1)));     // the line y = 1, towards the origin
+  CHECK(normals[5].isZero(0));                         // the NaN point
+  CHECK(normals[0].isApprox(Eigen::Vector2d(0, -1)));  // the line y = 1, towards the origin
   const auto cov = estimate_covariances(line, 5, 2, 0.01);
   CHECK(cov[5] == Eigen::Matrix2d::Identity());
   CHECK(cov[0].isApprox(Eigen::Vector2d(1, 0.01).asDiagonal().toDenseMatrix()));

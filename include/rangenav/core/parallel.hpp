@@ -33,8 +33,7 @@ namespace detail {
 
 /// Throws invalid_argument unless num_threads >= 1.
 inline void require_threads(std::string_view where, int num_threads) {
-  if (num_threads < 1)
-    throw_invalid_argument(where, "num_threads", num_threads, "must be >= 1");
+  if (num_threads < 1) throw_invalid_argument(where, "num_threads", num_threads, "must be >= 1");
 }
 
 /// The number of blocks of `block` items that cover n items.

@@ -127,8 +127,8 @@ template <std::floating_point Scalar>
 /// rigid transforms leaves of orthonormality in Scalar's precision (1e-6 in double, 1e-3 in
 /// float).
 template <class Scalar>
-inline constexpr Scalar rigid_tolerance =
-    std::is_same_v<Scalar, float> ? Scalar(1e-3) : Scalar(1e-6);
+inline constexpr Scalar rigid_tolerance = std::is_same_v<Scalar, float> ? Scalar(1e-3)
+                                                                        : Scalar(1e-6);
 
 /// True when every coefficient is finite and the linear part is a rotation (orthonormal,
 /// determinant +1) within `tolerance`.

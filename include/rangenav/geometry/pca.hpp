@@ -24,13 +24,13 @@ namespace rangenav {
 template <int D, class Scalar = double>
 struct PcaFit {
   static_assert(D == 2 || D == 3, "PcaFit: dimension must be 2 or 3");
-  using point_type = Point<D, Scalar>;
-  using matrix_type = Eigen::Matrix<Scalar, D, D>;
+  using point_type = Point<D, Scalar>;              ///< a point, a direction
+  using matrix_type = Eigen::Matrix<Scalar, D, D>;  ///< the covariance, the eigenvectors
 
-  std::size_t count = 0;                                ///< points fitted
-  point_type mean = point_type::Zero();                 ///< their centroid
-  matrix_type covariance = matrix_type::Zero();         ///< (1/n) sum (p - mean)(p - mean)^T
-  point_type eigenvalues = point_type::Zero();          ///< of the covariance, ascending
+  std::size_t count = 0;                               ///< points fitted
+  point_type mean = point_type::Zero();                ///< their centroid
+  matrix_type covariance = matrix_type::Zero();        ///< (1/n) sum (p - mean)(p - mean)^T
+  point_type eigenvalues = point_type::Zero();         ///< of the covariance, ascending
   matrix_type eigenvectors = matrix_type::Identity();  ///< unit columns, in eigenvalue order
 
   /// The direction of least spread: a surface's normal in 3D, a line's normal in 2D.
@@ -38,9 +38,7 @@ struct PcaFit {
   /// The direction of most spread: a line's direction.
   [[nodiscard]] point_type principal_direction() const { return eigenvectors.col(D - 1); }
   /// RMS distance of the points from the hyperplane through the mean with normal normal().
-  [[nodiscard]] Scalar normal_rms() const {
-    return std::sqrt(std::max(Scalar(0), eigenvalues(0)));
-  }
+  [[nodiscard]] Scalar normal_rms() const { return std::sqrt(std::max(Scalar(0), eigenvalues(0))); }
 };
 
 /// The eigen decomposition of a given covariance (e.g. one accumulated from weighted moments).

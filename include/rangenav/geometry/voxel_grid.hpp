@@ -182,8 +182,9 @@ template <PointCloud C>
 /// (in parallel), the points bucketed by key hash in input order, each bucket's voxels summed in
 /// input order (in parallel), the voxels sorted by key.
 template <PointCloud C>
-[[nodiscard]] std::vector<cloud_point_t<C>> voxel_downsample_parallel(
-    const C& cloud, traits::scalar_t<C> leaf_size, int num_threads) {
+[[nodiscard]] std::vector<cloud_point_t<C>> voxel_downsample_parallel(const C& cloud,
+                                                                      traits::scalar_t<C> leaf_size,
+                                                                      int num_threads) {
   using Scalar = traits::scalar_t<C>;
   constexpr int D = traits::dimension_v<C>;
   using Point = cloud_point_t<C>;

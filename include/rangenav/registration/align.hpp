@@ -51,6 +51,7 @@ enum class RegistrationMethod {
   gicp             ///< Generalized-ICP, plane-to-plane (Segal et al. 2009)
 };
 
+/// The method's name as spelled in the enum.
 [[nodiscard]] constexpr std::string_view to_string(RegistrationMethod method) {
   switch (method) {
     case RegistrationMethod::point_to_point:
@@ -67,7 +68,7 @@ enum class RegistrationMethod {
 /// with your sensor.
 template <std::floating_point Scalar = double>
 struct AlignSettings {
-  RegistrationMethod method = RegistrationMethod::gicp;
+  RegistrationMethod method = RegistrationMethod::gicp;  ///< the residual (see the file comment)
   /// Voxel edge of the filter applied to both clouds first (m); 0 = use the clouds as given.
   Scalar voxel_size = 0;
   /// Pairs farther apart are not formed (m). It must exceed the error of the initial guess
@@ -80,7 +81,7 @@ struct AlignSettings {
   Scalar gicp_epsilon = static_cast<Scalar>(default_gicp_epsilon);
   /// Robust kernel on the residual (its delta is a distance in metres for every method).
   RobustKernel<Scalar> kernel{};
-  int max_iterations = 50;
+  int max_iterations = 50;  ///< ICP iterations at most (each with a correspondence search)
   Scalar translation_epsilon = Scalar(1e-4);  ///< m: converged when an iteration moves less ...
   Scalar rotation_epsilon = Scalar(1e-4);     ///< rad: ... and turns less than this
   /// Run ICP's degeneracy check (IcpResult::smallest_eigenvalue; costs a k-NN query per pair for

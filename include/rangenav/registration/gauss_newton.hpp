@@ -59,8 +59,7 @@ struct PointMoments {
   [[nodiscard]] std::optional<Eigen::Matrix<Scalar, rot, rot>> rotation_scale() const {
     if (count == 0) return std::nullopt;
     const Point<D, Scalar> c = centroid();
-    const Eigen::Matrix<Scalar, D, D> cov =
-        outer / static_cast<Scalar>(count) - c * c.transpose();
+    const Eigen::Matrix<Scalar, D, D> cov = outer / static_cast<Scalar>(count) - c * c.transpose();
     const Scalar trace = cov.trace();
     if (!(trace > Scalar(0))) return std::nullopt;
     if constexpr (D == 2) {
@@ -129,13 +128,13 @@ template <int D, class Scalar>
 
 /// The part of a symmetric positive semi-definite matrix h (over the tangent space) along the
 /// directions that reach `ratio` of its strongest, in the centred coordinates z (d = M z) where
-/// the ratio compares metres of point motion: sum over the kept eigenpairs of M^-T (l v v^T) M^-1. Also gives those
-/// eigenpairs (in z) for a caller that solves with them.
+/// the ratio compares metres of point motion: sum over the kept eigenpairs of M^-T (l v v^T) M^-1.
+/// Also gives those eigenpairs (in z) for a caller that solves with them.
 template <int D, class Scalar>
 struct ObservedPart {
-  PoseMatrix<D, Scalar> m;                                 ///< d = M z
+  PoseMatrix<D, Scalar> m;                                   ///< d = M z
   Eigen::SelfAdjointEigenSolver<PoseMatrix<D, Scalar>> eig;  ///< of M^T h M
-  int first_kept = pose_dof<D>;                             ///< eigenpairs [first_kept, dof)
+  int first_kept = pose_dof<D>;                              ///< eigenpairs [first_kept, dof)
 
   ObservedPart(const PoseMatrix<D, Scalar>& h, const Point<D, Scalar>& centroid,
                const Eigen::Matrix<Scalar, pose_dof<D> - D, pose_dof<D> - D>& scale, Scalar ratio)
@@ -152,8 +151,8 @@ struct ObservedPart {
     constexpr int dof = pose_dof<D>;
     PoseMatrix<D, Scalar> kept = PoseMatrix<D, Scalar>::Zero();
     for (int k = first_kept; k < dof; ++k)
-      kept.noalias() += eig.eigenvalues()(k) * eig.eigenvectors().col(k) *
-                        eig.eigenvectors().col(k).transpose();
+      kept.noalias() +=
+          eig.eigenvalues()(k) * eig.eigenvectors().col(k) * eig.eigenvectors().col(k).transpose();
     const PoseMatrix<D, Scalar> m_inv = m.inverse();
     return m_inv.transpose() * kept * m_inv;
   }
@@ -169,8 +168,7 @@ struct ObservedPart {
 template <int D, class Scalar>
 [[nodiscard]] std::optional<PoseTangent<D, Scalar>> gauss_newton_step(
     const NormalEquations<D, Scalar>& eq, const PosePrior<D, Scalar>* prior,
-    const Transform<D, Scalar>& t, const PointMoments<D, Scalar>& points,
-    Scalar degeneracy_ratio) {
+    const Transform<D, Scalar>& t, const PointMoments<D, Scalar>& points, Scalar degeneracy_ratio) {
   constexpr int dof = pose_dof<D>;
   using Tangent = PoseTangent<D, Scalar>;
   using Matrix = PoseMatrix<D, Scalar>;
@@ -180,8 +178,7 @@ template <int D, class Scalar>
     if (prior == nullptr) return std::nullopt;
     scale = Scale::Identity();  // no residual geometry: the prior alone
   }
-  const ObservedPart<D, Scalar> observed(eq.hessian, points.centroid(), *scale,
-                                         degeneracy_ratio);
+  const ObservedPart<D, Scalar> observed(eq.hessian, points.centroid(), *scale, degeneracy_ratio);
   const Matrix& m = observed.m;
   const Tangent b = m.transpose() * eq.gradient;
   const auto& values = observed.eig.eigenvalues();

@@ -39,8 +39,8 @@ namespace rangenav {
 template <int D, std::floating_point Scalar = double>
 struct GicpSolver {
   static_assert(D == 2 || D == 3, "GicpSolver: dimension must be 2 or 3");
-  static constexpr std::size_t min_pairs = 3;
-  using covariance_type = Eigen::Matrix<Scalar, D, D>;
+  static constexpr std::size_t min_pairs = 3;  ///< fewer pairs do not determine a transform
+  using covariance_type = Eigen::Matrix<Scalar, D, D>;  ///< a point's covariance
 
   /// Covariances of the model points, by model index; must outlive solve().
   std::span<const covariance_type> model_covariances{};

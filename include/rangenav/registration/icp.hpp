@@ -51,8 +51,8 @@
 #include "rangenav/registration/gauss_newton.hpp"
 #include "rangenav/registration/point_to_plane_solver.hpp"
 #include "rangenav/registration/point_to_point_solver.hpp"
-#include "rangenav/registration/transform_solver.hpp"
 #include "rangenav/registration/rejectors.hpp"
+#include "rangenav/registration/transform_solver.hpp"
 #include "rangenav/search/nearest_neighbor_search.hpp"
 
 namespace rangenav {
@@ -66,6 +66,7 @@ enum class IcpTermination {
                    ///< the normal equations are near-singular (e.g. a featureless corridor)
 };
 
+/// The reason's name as spelled in the enum.
 [[nodiscard]] constexpr std::string_view to_string(IcpTermination reason) {
   switch (reason) {
     case IcpTermination::converged:
@@ -83,7 +84,7 @@ enum class IcpTermination {
 /// ICP parameters that are not a policy's.
 template <std::floating_point Scalar = double>
 struct IcpParams {
-  int max_iterations = 50;
+  int max_iterations = 50;  ///< iterations at most (each with a correspondence search)
   Scalar translation_epsilon = Scalar(1e-4);  ///< m: converged when the update moves less ...
   Scalar rotation_epsilon = Scalar(1e-4);     ///< rad: ... and turns less than this
   std::size_t min_pairs = 0;                  ///< at least the solver's minimum; 0 = that minimum
@@ -120,6 +121,7 @@ struct IcpParams {
   /// solvers treat them as unobserved too (transform_solver.hpp, default_degeneracy_ratio).
   Scalar degeneracy_ratio = static_cast<Scalar>(default_degeneracy_ratio);
 
+  /// Throws invalid_argument for a value out of range.
   void validate() const {
     constexpr std::string_view where = "IcpParams";
     if (max_iterations < 1)
@@ -139,11 +141,11 @@ struct IcpParams {
 /// The outcome of one alignment. Every number is finite.
 template <int D, class Scalar = double>
 struct IcpResult {
-  static constexpr int dof = pose_dof<D>;
+  static constexpr int dof = pose_dof<D>;  ///< degrees of freedom of the transform
 
   Transform<D, Scalar> transform = Transform<D, Scalar>::Identity();  ///< data -> model frame
-  bool converged = false;
-  IcpTermination reason = IcpTermination::max_iterations;
+  bool converged = false;                                  ///< reason == IcpTermination::converged
+  IcpTermination reason = IcpTermination::max_iterations;  ///< why it stopped
   int iterations = 0;  ///< iterations run (each with a correspondence search)
   /// Of them, those on the IcpParams::coarse_points subset of the data (the first ones).
   int coarse_iterations = 0;
@@ -188,19 +190,21 @@ class BasicIcp {
                 "Icp: every rejector must model CorrespondenceRejector");
 
  public:
-  static constexpr int dimension = D;
-  using scalar_type = Scalar;
-  using point_type = Point<D, Scalar>;
-  using transform_type = Transform<D, Scalar>;
-  using result_type = IcpResult<D, Scalar>;
-  using correspondence_type = Correspondence<D, Scalar>;
-  using solver_type = Solver;
+  static constexpr int dimension = D;                     ///< 2 or 3
+  using scalar_type = Scalar;                             ///< float or double
+  using point_type = Point<D, Scalar>;                    ///< a point of either cloud
+  using transform_type = Transform<D, Scalar>;            ///< data -> model frame
+  using result_type = IcpResult<D, Scalar>;               ///< what align() returns
+  using correspondence_type = Correspondence<D, Scalar>;  ///< a data-model pair
+  using solver_type = Solver;                             ///< the TransformSolver policy
 
-  IcpParams<Scalar> params{};
-  Solver solver{};
-  std::tuple<Rejectors...> rejectors{};
+  IcpParams<Scalar> params{};            ///< iterations, convergence, threads, degeneracy check
+  Solver solver{};                       ///< public typed policy: configure it directly
+  std::tuple<Rejectors...> rejectors{};  ///< applied in order every iteration
 
+  /// Default parameters, solver and rejectors.
   BasicIcp() = default;
+  /// These parameters and rejectors, a default solver.
   explicit BasicIcp(const IcpParams<Scalar>& p, Rejectors... r)
       : params(p), rejectors(std::move(r)...) {}
 
@@ -209,6 +213,7 @@ class BasicIcp {
   [[nodiscard]] R& rejector() {
     return std::get<R>(rejectors);
   }
+  /// The rejector of type R in the list (const).
   template <class R>
   [[nodiscard]] const R& rejector() const {
     return std::get<R>(rejectors);
@@ -274,8 +279,7 @@ class BasicIcp {
   }
 
   template <class Model>
-  result_type run(const Model& model, transform_type transform,
-                  const PosePrior<D, Scalar>* prior) {
+  result_type run(const Model& model, transform_type transform, const PosePrior<D, Scalar>* prior) {
     result_type result;
     result.data_count = data_.size();
     const std::size_t min_pairs = std::max<std::size_t>(params.min_pairs, Solver::min_pairs);
@@ -371,81 +375,81 @@ class BasicIcp {
     }
     searches_.assign(detail::block_count(count, match_block), 0);
     knn_.resize(static_cast<std::size_t>(params.num_threads));
-    detail::for_each_block(count, match_block, params.num_threads, [&](std::size_t b,
-                                                                      std::size_t begin,
-                                                                      std::size_t end, int thread) {
-      std::vector<Neighbor<Scalar>>& knn = knn_[static_cast<std::size_t>(thread)];
-      std::size_t searches = 0;
-      for (std::size_t k = begin; k < end; ++k) {
-        const std::size_t j = k * stride;
-        found_[k] = 0;
-        const point_type p = t(data_[j]);
-        bool admitted = true;
-        std::apply([&](const auto&... r) { ((admitted = admitted && admits(r, ctx, p)), ...); },
-                   rejectors);
-        if (!admitted) continue;
-        if (!reuse) {
-          ++searches;
-          if (const auto nb = model.nearest(p, bound_sq)) {
-            slots_[k] = {data_[j], model.point(nb->index), nb->distance_sq, data_index_[j],
-                         nb->index};
-            found_[k] = 1;
-          }
-          continue;
-        }
-        // Reuse of the last search of this data point, made at `query`, which found the
-        // candidates (its k nearest model points within the bound) and proved every other
-        // model point at least `others` away. The point has since moved by delta, so every
-        // other model point is now at least others - delta away (triangle inequality): if the
-        // closest candidate is nearer than that, it is the nearest model point; if there was
-        // none and others - delta reaches the bound, there is none.
-        NeighborCache& c = cache_[j];
-        if (c.count != no_cache) {
-          const Scalar delta = (p - c.query).norm();
-          const Scalar margin = Scalar(64) * std::numeric_limits<Scalar>::epsilon() *
-                                (Scalar(1) + p.template lpNorm<Eigen::Infinity>() + c.others);
-          const Scalar reach = c.others - delta - margin;
-          if (c.count == 0) {
-            if (reach >= bound) continue;
-          } else {
-            std::uint32_t best = 0;
-            Scalar best_sq = std::numeric_limits<Scalar>::infinity();
-            for (std::uint32_t q = 0; q < c.count; ++q) {
-              const std::uint32_t index = candidates_[j * candidates + q];
-              const point_type& m = model.point(index);
-              Scalar d_sq = 0;  // summed per axis in order, as the kd-tree's metric does
-              for (int d = 0; d < D; ++d)
-                d_sq += (p[d] - m[d]) * (p[d] - m[d]);
-              if (d_sq < best_sq) {
-                best_sq = d_sq;
-                best = index;
-              }
-            }
-            if (std::sqrt(best_sq) < reach) {
-              if (best_sq < bound_sq) {
-                slots_[k] = {data_[j], model.point(best), best_sq, data_index_[j], best};
+    detail::for_each_block(
+        count, match_block, params.num_threads,
+        [&](std::size_t b, std::size_t begin, std::size_t end, int thread) {
+          std::vector<Neighbor<Scalar>>& knn = knn_[static_cast<std::size_t>(thread)];
+          std::size_t searches = 0;
+          for (std::size_t k = begin; k < end; ++k) {
+            const std::size_t j = k * stride;
+            found_[k] = 0;
+            const point_type p = t(data_[j]);
+            bool admitted = true;
+            std::apply([&](const auto&... r) { ((admitted = admitted && admits(r, ctx, p)), ...); },
+                       rejectors);
+            if (!admitted) continue;
+            if (!reuse) {
+              ++searches;
+              if (const auto nb = model.nearest(p, bound_sq)) {
+                slots_[k] = {data_[j], model.point(nb->index), nb->distance_sq, data_index_[j],
+                             nb->index};
                 found_[k] = 1;
               }
               continue;
             }
+            // Reuse of the last search of this data point, made at `query`, which found the
+            // candidates (its k nearest model points within the bound) and proved every other
+            // model point at least `others` away. The point has since moved by delta, so every
+            // other model point is now at least others - delta away (triangle inequality): if the
+            // closest candidate is nearer than that, it is the nearest model point; if there was
+            // none and others - delta reaches the bound, there is none.
+            NeighborCache& c = cache_[j];
+            if (c.count != no_cache) {
+              const Scalar delta = (p - c.query).norm();
+              const Scalar margin = Scalar(64) * std::numeric_limits<Scalar>::epsilon() *
+                                    (Scalar(1) + p.template lpNorm<Eigen::Infinity>() + c.others);
+              const Scalar reach = c.others - delta - margin;
+              if (c.count == 0) {
+                if (reach >= bound) continue;
+              } else {
+                std::uint32_t best = 0;
+                Scalar best_sq = std::numeric_limits<Scalar>::infinity();
+                for (std::uint32_t q = 0; q < c.count; ++q) {
+                  const std::uint32_t index = candidates_[j * candidates + q];
+                  const point_type& m = model.point(index);
+                  Scalar d_sq = 0;  // summed per axis in order, as the kd-tree's metric does
+                  for (int d = 0; d < D; ++d)
+                    d_sq += (p[d] - m[d]) * (p[d] - m[d]);
+                  if (d_sq < best_sq) {
+                    best_sq = d_sq;
+                    best = index;
+                  }
+                }
+                if (std::sqrt(best_sq) < reach) {
+                  if (best_sq < bound_sq) {
+                    slots_[k] = {data_[j], model.point(best), best_sq, data_index_[j], best};
+                    found_[k] = 1;
+                  }
+                  continue;
+                }
+              }
+            }
+            // The k nearest within the bound: the first pairs, the k-th bounds the others.
+            ++searches;
+            model.knn(p, candidates, knn, bound_sq);
+            c.query = p;
+            c.count = static_cast<std::uint32_t>(knn.size());
+            c.others = knn.size() == candidates ? std::sqrt(knn.back().distance_sq) : bound;
+            for (std::size_t q = 0; q < knn.size(); ++q)
+              candidates_[j * candidates + q] = knn[q].index;
+            if (!knn.empty()) {
+              slots_[k] = {data_[j], model.point(knn[0].index), knn[0].distance_sq, data_index_[j],
+                           knn[0].index};
+              found_[k] = 1;
+            }
           }
-        }
-        // The k nearest within the bound: the first pairs, the k-th bounds the others.
-        ++searches;
-        model.knn(p, candidates, knn, bound_sq);
-        c.query = p;
-        c.count = static_cast<std::uint32_t>(knn.size());
-        c.others = knn.size() == candidates ? std::sqrt(knn.back().distance_sq) : bound;
-        for (std::size_t q = 0; q < knn.size(); ++q)
-          candidates_[j * candidates + q] = knn[q].index;
-        if (!knn.empty()) {
-          slots_[k] = {data_[j], model.point(knn[0].index), knn[0].distance_sq, data_index_[j],
-                       knn[0].index};
-          found_[k] = 1;
-        }
-      }
-      searches_[b] = searches;
-    });
+          searches_[b] = searches;
+        });
     pairs_.clear();
     for (std::size_t k = 0; k < count; ++k)
       if (found_[k] != 0) pairs_.push_back(slots_[k]);
@@ -515,10 +519,9 @@ class BasicIcp {
     const detail::Linearization<D, Scalar> lin = detail::linearize_pairs<D, Scalar>(
         std::span<const correspondence_type>(pairs_), params.num_threads, degeneracy_scratch_,
         [&](const correspondence_type& pr, NormalEquations<D, Scalar>& eq) {
-          const point_type n =
-              given.empty() ? normals_[static_cast<std::size_t>(&pr - first)]
-              : pr.model_index < given.size() ? given[pr.model_index]
-                                              : point_type::Zero();
+          const point_type n = given.empty() ? normals_[static_cast<std::size_t>(&pr - first)]
+                               : pr.model_index < given.size() ? given[pr.model_index]
+                                                               : point_type::Zero();
           if (n.isZero(0)) return false;
           detail::add_point_to_plane<D, Scalar>(eq, plain, n, pr, apply, rt);
           return true;
@@ -539,7 +542,8 @@ class BasicIcp {
     // In the model frame: the translation (and in 3D the rotation axis) turned by R.
     Row weakest = eig.eigenvectors().col(0);
     weakest.template head<D>() = transform.linear() * weakest.template head<D>();
-    if constexpr (D == 3) weakest.template tail<3>() = transform.linear() * weakest.template tail<3>();
+    if constexpr (D == 3)
+      weakest.template tail<3>() = transform.linear() * weakest.template tail<3>();
     result.weakest_direction = weakest;
     if (lambda_min < params.degeneracy_threshold) {
       result.reason = IcpTermination::degenerate;
@@ -593,9 +597,9 @@ class BasicIcp {
   std::vector<NeighborCache> cache_;
   std::vector<std::uint32_t> candidates_;  ///< reuse_candidates model indices per data point
   std::vector<correspondence_type> pairs_;
-  std::vector<correspondence_type> slots_;  ///< the pair of each searched data point
-  std::vector<std::uint8_t> found_;         ///< whether slots_[k] holds a pair
-  std::vector<std::size_t> searches_;       ///< searches per block
+  std::vector<correspondence_type> slots_;          ///< the pair of each searched data point
+  std::vector<std::uint8_t> found_;                 ///< whether slots_[k] holds a pair
+  std::vector<std::size_t> searches_;               ///< searches per block
   std::vector<std::vector<Neighbor<Scalar>>> knn_;  ///< one k-NN buffer per thread
   std::vector<point_type> normals_;                 ///< degeneracy check: normal per pair
   std::vector<detail::Linearization<D, Scalar>> degeneracy_scratch_;

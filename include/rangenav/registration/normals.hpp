@@ -50,26 +50,26 @@ void for_each_local_normal(const S& search, std::size_t k, int num_threads, cons
   constexpr int D = S::dimension;
   using Scalar = typename S::scalar_type;
   constexpr std::size_t block = 256;
-  for_each_block(search.size(), block, num_threads, [&](std::size_t, std::size_t begin,
-                                                         std::size_t end, int) {
-    std::vector<Neighbor<Scalar>> knn;
-    knn.reserve(k);
-    for (std::size_t i = begin; i < end; ++i) {
-      const std::size_t found = search.knn(search.point(i), k, knn);
-      if (found < static_cast<std::size_t>(D + 1)) {
-        out(i, static_cast<const Point<D, Scalar>*>(nullptr));
-        continue;
-      }
-      const PcaFit<D, Scalar> fit = fit_moments<D, Scalar>(
-          found, [&](std::size_t m) -> decltype(auto) { return search.point(knn[m].index); });
-      if (!(fit.covariance.cwiseAbs().maxCoeff() > Scalar(0))) {
-        out(i, static_cast<const Point<D, Scalar>*>(nullptr));
-        continue;
-      }
-      const Point<D, Scalar> n = smallest_eigenvector<D, Scalar>(fit.covariance);
-      out(i, n.allFinite() ? &n : nullptr);
-    }
-  });
+  for_each_block(
+      search.size(), block, num_threads, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+        std::vector<Neighbor<Scalar>> knn;
+        knn.reserve(k);
+        for (std::size_t i = begin; i < end; ++i) {
+          const std::size_t found = search.knn(search.point(i), k, knn);
+          if (found < static_cast<std::size_t>(D + 1)) {
+            out(i, static_cast<const Point<D, Scalar>*>(nullptr));
+            continue;
+          }
+          const PcaFit<D, Scalar> fit = fit_moments<D, Scalar>(
+              found, [&](std::size_t m) -> decltype(auto) { return search.point(knn[m].index); });
+          if (!(fit.covariance.cwiseAbs().maxCoeff() > Scalar(0))) {
+            out(i, static_cast<const Point<D, Scalar>*>(nullptr));
+            continue;
+          }
+          const Point<D, Scalar> n = smallest_eigenvector<D, Scalar>(fit.covariance);
+          out(i, n.allFinite() ? &n : nullptr);
+        }
+      });
 }
 
 template <NearestNeighborSearch S>
@@ -91,12 +91,11 @@ template <NearestNeighborSearch S>
   detail::require_neighbors<S>("estimate_normals", k);
   detail::require_threads("estimate_normals", num_threads);
   std::vector<Point<D, Scalar>> normals(search.size(), Point<D, Scalar>::Zero());
-  detail::for_each_local_normal(search, k, num_threads,
-                               [&](std::size_t i, const Point<D, Scalar>* normal) {
-                                 if (normal == nullptr) return;
-                                 normals[i] = normal->dot(search.point(i)) > Scalar(0) ? -*normal
-                                                                                      : *normal;
-                               });
+  detail::for_each_local_normal(
+      search, k, num_threads, [&](std::size_t i, const Point<D, Scalar>* normal) {
+        if (normal == nullptr) return;
+        normals[i] = normal->dot(search.point(i)) > Scalar(0) ? -*normal : *normal;
+      });
   return normals;
 }
 
@@ -105,9 +104,9 @@ template <NearestNeighborSearch S>
 /// num_threads >= 1 and 0 < epsilon <= 1.
 template <NearestNeighborSearch S>
 [[nodiscard]] std::vector<Eigen::Matrix<typename S::scalar_type, S::dimension, S::dimension>>
-estimate_covariances(const S& search, std::size_t k = default_shape_neighbors, int num_threads = 1,
-                     typename S::scalar_type epsilon =
-                         static_cast<typename S::scalar_type>(default_gicp_epsilon)) {
+estimate_covariances(
+    const S& search, std::size_t k = default_shape_neighbors, int num_threads = 1,
+    typename S::scalar_type epsilon = static_cast<typename S::scalar_type>(default_gicp_epsilon)) {
   constexpr int D = S::dimension;
   using Scalar = typename S::scalar_type;
   using Matrix = Eigen::Matrix<Scalar, D, D>;
@@ -118,13 +117,11 @@ estimate_covariances(const S& search, std::size_t k = default_shape_neighbors, i
     detail::throw_invalid_argument(where, "epsilon", epsilon, "must be in (0, 1]");
   std::vector<Matrix> covariances(search.size(), Matrix::Identity());
   // V diag(eps, 1, 1) V^T = I - (1 - eps) n n^T for the unit normal n (V orthonormal).
-  detail::for_each_local_normal(search, k, num_threads,
-                               [&](std::size_t i, const Point<D, Scalar>* normal) {
-                                 if (normal == nullptr) return;
-                                 covariances[i] = Matrix::Identity() - (Scalar(1) - epsilon) *
-                                                                           *normal *
-                                                                           normal->transpose();
-                               });
+  detail::for_each_local_normal(
+      search, k, num_threads, [&](std::size_t i, const Point<D, Scalar>* normal) {
+        if (normal == nullptr) return;
+        covariances[i] = Matrix::Identity() - (Scalar(1) - epsilon) * *normal * normal->transpose();
+      });
   return covariances;
 }
 
@@ -147,9 +144,9 @@ template <PointCloud C>
 template <PointCloud C>
 [[nodiscard]] std::vector<
     Eigen::Matrix<traits::scalar_t<C>, traits::dimension_v<C>, traits::dimension_v<C>>>
-estimate_covariances(const C& cloud, std::size_t k = default_shape_neighbors, int num_threads = 1,
-                     traits::scalar_t<C> epsilon =
-                         static_cast<traits::scalar_t<C>>(default_gicp_epsilon)) {
+estimate_covariances(
+    const C& cloud, std::size_t k = default_shape_neighbors, int num_threads = 1,
+    traits::scalar_t<C> epsilon = static_cast<traits::scalar_t<C>>(default_gicp_epsilon)) {
   constexpr int D = traits::dimension_v<C>;
   using Scalar = traits::scalar_t<C>;
   const KdTree<D, Scalar> tree(cloud);

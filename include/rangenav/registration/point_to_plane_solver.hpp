@@ -62,7 +62,7 @@ void add_point_to_plane(NormalEquations<D, Scalar>& eq, const RobustKernel<Scala
 template <int D, std::floating_point Scalar = double>
 struct PointToPlaneSolver {
   static_assert(D == 2 || D == 3, "PointToPlaneSolver: dimension must be 2 or 3");
-  static constexpr std::size_t min_pairs = 3;
+  static constexpr std::size_t min_pairs = 3;  ///< fewer pairs do not determine a transform
 
   /// Unit model normals indexed by model index (zero = no plane); must outlive solve().
   std::span<const Point<D, Scalar>> model_normals{};

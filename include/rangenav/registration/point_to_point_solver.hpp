@@ -147,7 +147,7 @@ template <class Scalar, class Weight>
 template <int D, std::floating_point Scalar = double>
 struct PointToPointSolver {
   static_assert(D == 2 || D == 3, "PointToPointSolver: dimension must be 2 or 3");
-  static constexpr std::size_t min_pairs = D == 2 ? 2 : 3;
+  static constexpr std::size_t min_pairs = D == 2 ? 2 : 3;  ///< fewer do not determine one
 
   /// Robust kernel on the squared pair distance |m - T d|^2 (m^2): its delta is a distance.
   RobustKernel<Scalar> kernel{};
@@ -197,10 +197,9 @@ struct PointToPointSolver {
     bool operator()(const Correspondence<D, Scalar>& pr, const Apply& apply,
                     const Eigen::Matrix<Scalar, D, D>& rt, NormalEquations<D, Scalar>& eq) const {
       const Point<D, Scalar> r = rt * (apply(pr.data) - pr.model);
-      detail::add_point_residual<D, Scalar>(eq, solver->kernel,
-                                            detail::rotation_jacobian<Scalar>(pr.data), r,
-                                            Eigen::Matrix<Scalar, D, D>::Identity(),
-                                            static_cast<std::size_t>(D));
+      detail::add_point_residual<D, Scalar>(
+          eq, solver->kernel, detail::rotation_jacobian<Scalar>(pr.data), r,
+          Eigen::Matrix<Scalar, D, D>::Identity(), static_cast<std::size_t>(D));
       return true;
     }
   };

@@ -107,7 +107,7 @@ template <int D, class Scalar>
 /// (the axis of a corridor) and yields to the data where they are constrained.
 template <int D, class Scalar = double>
 struct PosePrior {
-  Transform<D, Scalar> mean = Transform<D, Scalar>::Identity();
+  Transform<D, Scalar> mean = Transform<D, Scalar>::Identity();  ///< the expected transform
   /// Symmetric positive semi-definite; zero rows leave a direction to the data alone.
   PoseMatrix<D, Scalar> information = PoseMatrix<D, Scalar>::Zero();
 
@@ -142,15 +142,16 @@ struct PosePrior {
 /// sum w_i J_i^T W_i r_i with the IRLS weights w_i = rho'(s_i) of the robust kernel.
 template <int D, class Scalar = double>
 struct NormalEquations {
-  static constexpr int dof = pose_dof<D>;
-  PoseMatrix<D, Scalar> hessian = PoseMatrix<D, Scalar>::Zero();
-  PoseTangent<D, Scalar> gradient = PoseTangent<D, Scalar>::Zero();
-  Scalar cost = 0;            ///< sum rho(s_i)
-  Scalar weighted_sq = 0;     ///< sum w_i s_i: the weighted squared residuals
+  static constexpr int dof = pose_dof<D>;                            ///< 3 in 2D, 6 in 3D
+  PoseMatrix<D, Scalar> hessian = PoseMatrix<D, Scalar>::Zero();     ///< sum w_i J_i^T W_i J_i
+  PoseTangent<D, Scalar> gradient = PoseTangent<D, Scalar>::Zero();  ///< sum w_i J_i^T W_i r_i
+  Scalar cost = 0;                                                   ///< sum rho(s_i)
+  Scalar weighted_sq = 0;  ///< sum w_i s_i: the weighted squared residuals
   /// Scalar measurements (D per point-to-point pair, 1 per point-to-plane or GICP pair)
   std::size_t residuals = 0;
-  std::size_t pairs = 0;      ///< pairs that contributed
+  std::size_t pairs = 0;  ///< pairs that contributed
 
+  /// Adds another block's sums (the ordered reduction of core/parallel.hpp).
   NormalEquations& operator+=(const NormalEquations& o) {
     hessian += o.hessian;
     gradient += o.gradient;
@@ -297,8 +298,7 @@ void add_prior(NormalEquations<D, Scalar>& eq, const PosePrior<D, Scalar>& prior
   if constexpr (D == 2) {
     j(2, 2) = 1;
   } else {
-    j.template bottomRightCorner<3, 3>() =
-        so3_right_jacobian_inverse<Scalar>(e.template tail<3>());
+    j.template bottomRightCorner<3, 3>() = so3_right_jacobian_inverse<Scalar>(e.template tail<3>());
   }
   const PoseMatrix<D, Scalar> jt_l = j.transpose() * prior.information;
   eq.hessian.noalias() += jt_l * j;
