@@ -5,6 +5,8 @@
 #include "docs_support.hpp"
 #include "rangenav/rangenav.hpp"
 
+namespace docs = rangenav::docs_test;
+
 TEST_CASE("docs/registration: align() with settings and with a pose prior", "[docs]") {
   const docs::ScratchDir dir("registration_align");
   const rangenav::Transform3d motion = docs::room_motion();
