@@ -1,11 +1,11 @@
-// 04_virtual_maps: egocentric obstacle and structure maps from a continuously pitching laser
-// scanner (paper 002 §3-4, Fig. 2 and Fig. 6).
+// Lesson 04: egocentric obstacle and structure maps from a continuously pitching laser scanner
+// (paper 002 §3-4, Fig. 2 and Fig. 6).
 //
-// A robot with a horizontal 2D laser 0.30 m above the floor and a pitching 2D scanner (SICK LMS
-// 2xx, 181 beams, nodding between -10 and 40 deg) approaches four obstacles of the simulated
-// apartment that a 2D laser cannot see: a book lying on the floor (3 cm), the couch table's top
-// (0.40-0.44 m, the scan plane passes under it), an open drawer (0.55-0.70 m) and a descending
-// stair. For each, it builds
+// A 2D laser sees only its own plane. Here a robot with a horizontal 2D laser 0.30 m above the
+// floor and a pitching 2D scanner (SICK LMS 2xx, 181 beams, nodding between -10 and 40 deg)
+// approaches four obstacles of the simulated apartment that the 2D laser cannot see: a book lying
+// on the floor (3 cm), the couch table's top (0.40-0.44 m, the scan plane passes under it), an
+// open drawer (0.55-0.70 m) and a descending stair. For each, it builds
 //   - an obstacle map (VirtualMap<ObstacleMapPolicy>): per bearing the nearest reading inside the
 //     virtual corridor, floor removed by the neighbourhood classification, stairs turned into
 //     artificial obstacles; updated with every 2D scan (transform by odometry, age-out, replace);
@@ -13,20 +13,12 @@
 //     reading, i.e. the walls;
 // and asks each map and the 2D scan whether it holds the obstacle at its true distance.
 //
-// Then the area of interest adapted to velocity (§3.3): at standstill the scanner nods over its
-// full vertical aperture (walls and ceiling for 3D mapping); the faster the robot drives, the
-// more the pitch range narrows towards the virtual corridor, the robot's height band seen from
-// d_min on, so each nod takes less time and the ground ahead is looked at again before the robot
-// has driven far. The robot drives down a corridor towards a 3-cm box at several speeds; for
-// each the example prints the pitch range, the nod period, the distance driven per nod, the
-// floor look-ahead (the nearest floor the scanner sees) and where the box first entered the
-// obstacle map, and does the same at the top speed with the standstill pitch range for contrast.
-//
-// Usage: 04_virtual_maps [output.svg]   (default: virtual_maps.svg in the working directory)
-// The SVG shows, for each obstacle, the obstacle map (left) beside the structure map (right) in
-// the robot's frame, like Fig. 6 of the paper. The last line printed is JSON: for each obstacle
-// class whether the 2D scan, the obstacle map and the structure map hold it, and the median
-// update time (µs) of the obstacle map; the line before it is the §3.3 runs as JSON.
+// Run it as `04_virtual_maps [output.svg]` (default: virtual_maps.svg in the working directory).
+// The drawing shows, for each obstacle, the obstacle map (left) beside the structure map (right)
+// in the robot's frame, like Fig. 6 of the paper. The last line printed is JSON: for each
+// obstacle class whether the 2D scan, the obstacle map and the structure map hold it, and the
+// median update time (µs) of the obstacle map. How the nod narrows with speed (§3.3) is measured
+// by tools/area_of_interest.
 
 #include <algorithm>
 #include <chrono>
@@ -38,13 +30,13 @@
 #include <string>
 #include <vector>
 
-#include "rangenav/core/angles.hpp"
 #include "rangenav/egocentric/pitching_stream.hpp"
 #include "rangenav/egocentric/virtual_map.hpp"
 #include "rangenav/io/svg.hpp"
 #include "rangenav/sim/robot.hpp"
 #include "rangenav/sim/sensors.hpp"
 #include "rangenav/sim/worlds.hpp"
+#include "support/range_ahead.hpp"
 
 using namespace rangenav;
 
@@ -69,78 +61,6 @@ double true_distance(const sim::Scene& scene, const std::string& name, const Pos
       best = std::min(best, hit.range);
   }
   return best;
-}
-
-// The nearest valid reading within one bin of bearing 0 (the map's bins, or a scan's beams).
-template <class Map>
-double ahead(const Map& map) {
-  double best = std::numeric_limits<double>::infinity();
-  const std::size_t k = map.bin_index(0.0);
-  for (std::size_t j = k + map.size() - 1; j <= k + map.size() + 1; ++j)
-    if (!map.bin(j % map.size()).dummy) best = std::min(best, map.bin(j % map.size()).range);
-  return best;
-}
-double ahead(const LaserScan<double>& scan) {
-  const auto i = static_cast<std::size_t>(std::llround(-scan.angle_min() / scan.angle_increment()));
-  double best = std::numeric_limits<double>::infinity();
-  for (std::size_t j = i - 1; j <= i + 1; ++j)
-    if (scan.is_valid(j)) best = std::min(best, scan.range(j));
-  return best;
-}
-
-// One drive of the velocity-adapted AOI demo (§3.3).
-struct AoiRun {
-  double speed{0};            // m/s
-  bool adapted{true};         // pitch range from area_of_interest(speed), else the standstill one
-  PitchInterval<double> aoi;  // rad, positive looks down
-  double nod_s{0};            // one full nod
-  double look_ahead_m{0};     // the nearest floor seen: pitching_blind_range(pitch max)
-  double first_seen_m{0};     // distance to the box when it entered the obstacle map (0: never)
-  double longest_gap_m{0};    // the farthest the robot drove between two looks at the box
-};
-
-// The robot drives along a 3 m wide corridor towards a 3-cm box (front face at box_x) at `speed`
-// until it is 0.8 m in front of it; the pitching scanner nods over the pitch range `aoi`.
-AoiRun drive_towards_box(double speed, const PitchInterval<double>& aoi, bool adapted,
-                         std::mt19937& rng) {
-  constexpr double box_x = 4.0;
-  sim::World world;
-  world.add_wall({{-1.0, -1.5}, {8.0, -1.5}});
-  world.add_wall({{-1.0, 1.5}, {8.0, 1.5}});
-  world.add_box({{box_x + 0.1, 0.0}, {0.2, 0.3}, 0.0, 0.0, 0.03});
-  world.build_index();
-  sim::PitchingScannerParams pp;  // the simulator's scanner, 1 cm noise
-  pp.pitch_min = aoi.min;
-  pp.pitch_max = aoi.max;
-  const sim::PitchingScanner scanner(pp);
-  FloorClassifierParams<double> floor;
-  floor.range_noise = pp.noise.sigma;
-  floor.steepest_depression = aoi.max;
-  PitchingObstacleExtractor<double> extractor(pp.sensor_offset, floor);
-  ObstacleMap<double> map;
-  AoiRun run{
-      speed, adapted, aoi, scanner.nod_period(), pitching_blind_range(pp.sensor_offset, aoi.max),
-      0.0};
-  Pose2d pose{0, 0, 0}, previous = pose;
-  double last_look = std::numeric_limits<double>::quiet_NaN();
-  for (std::size_t k = 0; pose.x < box_x - 0.8; ++k) {
-    const auto points = extractor.push(scanner.scan(world, pose, scanner.scan_time(k), rng), pose);
-    map.update(relative(previous, pose), points);
-    const double d = ahead(map);
-    if (run.first_seen_m == 0 && std::abs(d - (box_x - pose.x)) <= 0.05) run.first_seen_m = d;
-    // A look at the box: this scan's obstacle points include some on the box.
-    const bool look = std::any_of(points.begin(), points.end(), [&](const Point3d& p) {
-      return std::abs(pose.x + p.x() - (box_x + 0.1)) < 0.15 && std::abs(p.y()) < 0.2;
-    });
-    if (look) {
-      if (!std::isnan(last_look))
-        run.longest_gap_m = std::max(run.longest_gap_m, pose.x - last_look);
-      last_look = pose.x;
-    }
-    previous = pose;
-    pose = sim::DifferentialDriveRobot::integrate(pose, speed, 0.0, pp.scan_period);
-  }
-  return run;
 }
 
 std::string json_bools(const std::vector<Target>& targets, const std::vector<bool>& found) {
@@ -202,8 +122,9 @@ Found approach(const sim::Scene& scene, const Target& target, std::size_t row, s
 
   const double truth = true_distance(scene, target.name, pose);
   const double truth_structure = true_distance(scene, target.name, structure_base);
-  const double d_obstacle = ahead(obstacle_map), d_scan = ahead(scan2d),
-               d_structure = ahead(structure);
+  const double d_obstacle = examples::range_ahead(obstacle_map),
+               d_scan = examples::range_ahead(scan2d),
+               d_structure = examples::range_ahead(structure);
   const Found found{std::abs(d_scan - truth) <= 0.05, std::abs(d_obstacle - truth) <= 0.05,
                     std::abs(d_structure - truth_structure) <= 0.05};
   std::printf(
@@ -227,38 +148,6 @@ Found approach(const sim::Scene& scene, const Target& target, std::size_t row, s
   svg.layer("robot").pose(Pose2d{at.x(), at.y(), 0.0}, 0.4, {.stroke = "black"});
   svg.layer("robot").pose(Pose2d{at.x() + right.x(), at.y(), 0.0}, 0.4, {.stroke = "black"});
   return found;
-}
-
-/// §3.3: the area of interest adapted to velocity. The pitch axis is 0.55 m high; at 0.5 m/s and
-/// above only the virtual corridor [0, 1] m from d_min = 1 m on is scanned. Returns the runs'
-/// JSON array.
-std::string area_of_interest_runs(std::mt19937& rng) {
-  const AreaOfInterestParams<double> aoi_params;
-  const double sensor_height = scanner_params().sensor_offset.z();
-  std::vector<AoiRun> runs;
-  for (const double v : {0.15, 0.3, 0.6})
-    runs.push_back(drive_towards_box(v, area_of_interest(v, sensor_height, aoi_params), true, rng));
-  runs.push_back(  // the top speed with the standstill pitch range, for contrast
-      drive_towards_box(0.6, area_of_interest(0.0, sensor_height, aoi_params), false, rng));
-  std::printf("area of interest adapted to velocity (§3.3), 3-cm box ahead in a corridor:\n");
-  std::string json = "[";
-  for (const AoiRun& r : runs) {
-    std::printf(
-        "  %.2f m/s %-9s pitch %+6.1f..%+5.1f deg, nod %.2f s = %.2f m driven, floor seen from "
-        "%.2f m, box first seen %.2f m ahead, looked at again after at most %.2f m\n",
-        r.speed, r.adapted ? "adapted" : "full AOI", rad_to_deg(r.aoi.min), rad_to_deg(r.aoi.max),
-        r.nod_s, r.nod_s * r.speed, r.look_ahead_m, r.first_seen_m, r.longest_gap_m);
-    char buf[256];
-    std::snprintf(buf, sizeof buf,
-                  "%s{\"speed\": %.2f, \"adapted\": %s, \"pitch_min_deg\": %.1f, "
-                  "\"pitch_max_deg\": %.1f, \"nod_s\": %.2f, \"look_ahead_m\": %.2f, "
-                  "\"first_seen_m\": %.2f, \"longest_gap_m\": %.2f}",
-                  json.size() > 1 ? ", " : "", r.speed, r.adapted ? "true" : "false",
-                  rad_to_deg(r.aoi.min), rad_to_deg(r.aoi.max), r.nod_s, r.look_ahead_m,
-                  r.first_seen_m, r.longest_gap_m);
-    json += buf;
-  }
-  return json + "]";
 }
 
 }  // namespace
@@ -289,12 +178,10 @@ int main(int argc, char** argv) {
   std::printf("wrote %s (obstacle maps left, structure maps right, one row per obstacle)\n",
               svg_path.c_str());
 
-  const std::string aoi_json = area_of_interest_runs(rng);
   std::nth_element(update_seconds.begin(),
                    update_seconds.begin() + static_cast<std::ptrdiff_t>(update_seconds.size() / 2),
                    update_seconds.end());
   const double update_us = 1e6 * update_seconds[update_seconds.size() / 2];
-  std::printf("{\"aoi\": %s}\n", aoi_json.c_str());  // the AOI runs; the last line: the maps
   std::printf(
       "{\"scan2d\": %s, \"obstacle_map\": %s, \"structure_map\": %s, \"update_us\": %.2f}\n",
       json_bools(targets, in_scan2d).c_str(), json_bools(targets, in_obstacle).c_str(),

@@ -20,14 +20,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <iomanip>
-#include <iostream>
 #include <numbers>
 #include <random>
-#include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <rangenav/io/svg.hpp>
@@ -44,12 +43,6 @@ using namespace rangenav;
 namespace {
 
 constexpr double deg = std::numbers::pi / 180;
-
-std::string fixed(double v, int digits = 3) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
-}
 
 /// The office corridor with all 8 doors at `opening` (rad; positive: into the offices).
 sim::Scene corridor(double opening) {
@@ -83,17 +76,17 @@ CorridorMap map_corridor(std::uint64_t seed) {
     }
   }
   m.doors = detector.doors();
-  std::cout << "mapping: " << dynamic << " dynamic readings, " << vanished << " vanished cells, "
-            << detector.potential_leaves().size() << " potential door leaves\n";
+  std::printf("mapping: %zu dynamic readings, %zu vanished cells, %zu potential door leaves\n",
+              dynamic, vanished, detector.potential_leaves().size());
   const auto true_doors = corridor(0.0).world.doors();
   for (const DoorModel& d : m.doors) {
     double nearest = 1e9;
     for (const auto& t : true_doors)
       nearest = std::min(nearest, (t.hinge - d.hinge).norm());
-    std::cout << "door: hinge (" << fixed(d.hinge.x(), 2) << ", " << fixed(d.hinge.y(), 2)
-              << "), leaf " << fixed(d.leaf_length, 2) << " m, opening range "
-              << fixed(d.opening_max / deg, 0) << " deg, " << fixed(nearest, 3)
-              << " m from the true hinge\n";
+    std::printf(
+        "door: hinge (%.2f, %.2f), leaf %.2f m, opening range %.0f deg, %.3f m from the "
+        "true hinge\n",
+        d.hinge.x(), d.hinge.y(), d.leaf_length, d.opening_max / deg, nearest);
   }
   detector.remove_doors(m.grid);  // the static map both filters localize on
   return m;
@@ -102,11 +95,10 @@ CorridorMap map_corridor(std::uint64_t seed) {
 // ---- 3. Localization with both filters -------------------------------------------------------
 
 struct Errors {
-  double mean{0}, max{0};
+  double mean{0}, max{0};  // position error (m)
 };
-
 struct TrackingResult {
-  Errors mcl, door_mcl;
+  Errors mcl, door_mcl;  // standard and door-aware MCL
   std::vector<Pose2d> truth;
   DoorAwareState door_states;  ///< door-aware MCL's door angle estimates at the end
 };
@@ -166,9 +158,9 @@ TrackingResult track(const sim::World& world, const CorridorMap& map, std::uint6
 
 // ---- 4. Fig. 4 -------------------------------------------------------------------------------
 
-/// The grid with the doors' angle ranges; `dy` metres below it the sensor model of door-aware MCL
-/// over the map, p(z | x, m, doors) of a beam end point every 0.1 m with the doors at `states`
-/// (grey levels, darker = more likely, below 2 % of the peak blank) and the estimated leaves.
+/// The grid with the detected doors' angle ranges and the robot's path; below it the sensor model
+/// of door-aware MCL over the map, p(z | x, m, doors) of a beam end point every 0.1 m with the
+/// doors at `states` (six grey levels, darker = more likely, below 2 % of the peak blank).
 void draw_fig4(const CorridorMap& m, const std::vector<Pose2d>& path,
                const DoorAwareState& states) {
   io::SvgDrawing svg;
@@ -177,7 +169,7 @@ void draw_fig4(const CorridorMap& m, const std::vector<Pose2d>& path,
     for (int x = 0; x < m.grid.width(); ++x)
       if (m.grid.is_occupied({x, y})) occupied.push_back(m.grid.cell_center({x, y}));
   svg.layer("static grid").points(occupied, {.stroke = "black", .point_radius_px = 1.0});
-  svg.layer("doors (min / max angle)");
+  svg.layer("doors (blue: min angle, red: max angle)");
   for (const DoorModel& d : m.doors) {
     svg.segment(d.hinge, d.leaf_end(d.opening_min), {.stroke = "blue", .stroke_width_px = 2});
     svg.segment(d.hinge, d.leaf_end(d.opening_max), {.stroke = "red", .stroke_width_px = 2});
@@ -185,46 +177,35 @@ void draw_fig4(const CorridorMap& m, const std::vector<Pose2d>& path,
   }
   svg.layer("robot path").path(path, {.stroke = "green"});
 
-  const double dy = m.grid.height() * m.grid.resolution() + 1.0;
-  const DoorAwareMcl model(m.grid, m.doors);
   const Point2d lo = m.grid.origin();
-  const Point2d hi = lo + Point2d(m.grid.width(), m.grid.height()) * m.grid.resolution();
+  const Point2d size = Point2d(m.grid.width(), m.grid.height()) * m.grid.resolution();
+  const Point2d below(0, size.y() + 1.0);  // the second picture's offset
+  const DoorAwareMcl model(m.grid, m.doors);
   std::vector<std::pair<Point2d, double>> samples;
   double peak = 0;
-  for (double y = lo.y() + 0.05; y < hi.y(); y += 0.1)
-    for (double x = lo.x() + 0.05; x < hi.x(); x += 0.1) {
-      const double p = std::exp(model.end_point_log_likelihood({x, y}, states));
-      samples.emplace_back(Point2d(x, y - dy), p);
-      peak = std::max(peak, p);
+  for (double y = lo.y() + 0.05; y < lo.y() + size.y(); y += 0.1)
+    for (double x = lo.x() + 0.05; x < lo.x() + size.x(); x += 0.1) {
+      samples.emplace_back(Point2d(x, y) - below,
+                           std::exp(model.end_point_log_likelihood({x, y}, states)));
+      peak = std::max(peak, samples.back().second);
     }
-  constexpr int levels = 6;
-  std::vector<std::vector<Point2d>> by_level(levels);
-  for (const auto& [q, p] : samples) {
-    const double v = p / peak;
-    if (v >= 0.02)
-      by_level[static_cast<std::size_t>(std::min(levels - 1.0, std::floor(v * levels)))].push_back(
-          q);
-  }
-  svg.layer("likelihood field, estimated door states");
-  for (int l = 0; l < levels; ++l) {  // 0.1 m is about 4.4 px in a 1000 px picture of 22 m
-    const int grey = 230 - 230 * (l + 1) / levels;
-    const std::string colour = "rgb(" + std::to_string(grey) + "," + std::to_string(grey) + "," +
-                               std::to_string(grey) + ")";
-    svg.points(by_level[static_cast<std::size_t>(l)], {.stroke = colour, .point_radius_px = 2.3});
+  std::vector<std::vector<Point2d>> by_level(6);
+  for (const auto& [q, p] : samples)
+    if (p >= 0.02 * peak)
+      by_level[std::min<std::size_t>(5, static_cast<std::size_t>(6 * p / peak))].push_back(q);
+  svg.layer("likelihood field of the static map, estimated door states");
+  for (std::size_t l = 0; l < 6; ++l) {  // 0.1 m is about 4.4 px in a 1000 px picture of 22 m
+    const std::string grey = std::to_string(230 - 230 * (l + 1) / 6);
+    svg.points(by_level[l],
+               {.stroke = "rgb(" + grey + "," + grey + "," + grey + ")", .point_radius_px = 2.3});
   }
   svg.layer("estimated doors (30 deg open)");
   for (std::size_t k = 0; k < m.doors.size(); ++k)
-    svg.segment(m.doors[k].hinge - Point2d(0, dy),
-                m.doors[k].leaf_end(states.doors[k].mean) - Point2d(0, dy),
+    svg.segment(m.doors[k].hinge - below, m.doors[k].leaf_end(states.doors[k].mean) - below,
                 {.stroke = "orange", .stroke_width_px = 1.5});
-  svg.text(lo + Point2d(0, m.grid.height() * m.grid.resolution() + 0.3),
-           "grid map with the detected doors' minimum (blue) and maximum (red) angles", 14);
-  svg.text(lo + Point2d(0, -0.7),
-           "likelihood field of the static map with the estimated door states (doors 30 deg open)",
-           14);
   std::filesystem::create_directories("doors_out");
   svg.save("doors_out/doors.svg");
-  std::cout << "wrote doors_out/doors.svg\n";
+  std::printf("wrote doors_out/doors.svg\n");
 }
 
 }  // namespace
@@ -233,29 +214,23 @@ int main(int argc, char** argv) {
   const std::uint64_t seed = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 1;
   const CorridorMap map = map_corridor(seed);  // steps 1-2
 
-  struct State {
-    const char* name;
-    double opening;
-  };
-  std::string mcl_json, door_json;
-  std::vector<Pose2d> drawn_path;
-  DoorAwareState drawn_states;  // door estimates of the partially open run, for Fig. 4
-  for (const State s : {State{"closed", 0.0}, State{"open", 90 * deg},
-                        State{"partially_open", 30 * deg}}) {  // step 3
-    const TrackingResult r = track(corridor(s.opening).world, map, seed);
-    std::cout << "doors " << s.name << ": standard MCL error mean " << fixed(r.mcl.mean)
-              << " m, max " << fixed(r.mcl.max) << " m; door-aware MCL mean "
-              << fixed(r.door_mcl.mean) << " m, max " << fixed(r.door_mcl.max) << " m\n";
-    const std::string sep = mcl_json.empty() ? "" : ", ";
-    mcl_json += sep + "\"" + s.name + "\": " + fixed(r.mcl.mean, 4);
-    door_json += sep + "\"" + s.name + "\": " + fixed(r.door_mcl.mean, 4);
-    if (drawn_path.empty()) drawn_path = r.truth;
-    if (s.opening == 30 * deg) drawn_states = r.door_states;
+  const std::vector<std::pair<const char*, double>> door_states = {
+      {"closed", 0.0}, {"open", 90 * deg}, {"partially_open", 30 * deg}};
+  std::vector<TrackingResult> runs;
+  for (const auto& [name, opening] : door_states) {  // step 3
+    const TrackingResult& r = runs.emplace_back(track(corridor(opening).world, map, seed));
+    std::printf(
+        "doors %s: standard MCL error mean %.3f m, max %.3f m; door-aware MCL mean %.3f m, max "
+        "%.3f m\n",
+        name, r.mcl.mean, r.mcl.max, r.door_mcl.mean, r.door_mcl.max);
   }
-  draw_fig4(map, drawn_path, drawn_states);  // step 4
+  draw_fig4(map, runs[0].truth, runs[2].door_states);  // step 4, the doors 30 deg open
 
-  std::cout << "{\"doors_true\": " << corridor(0.0).world.doors().size()
-            << ", \"doors_detected\": " << map.doors.size() << ", \"mcl_mean_err_m\": {" << mcl_json
-            << "}, \"door_mcl_mean_err_m\": {" << door_json << "}}\n";
+  std::printf(
+      "{\"doors_true\": %zu, \"doors_detected\": %zu, \"mcl_mean_err_m\": {\"closed\": %.4f, "
+      "\"open\": %.4f, \"partially_open\": %.4f}, \"door_mcl_mean_err_m\": {\"closed\": %.4f, "
+      "\"open\": %.4f, \"partially_open\": %.4f}}\n",
+      corridor(0.0).world.doors().size(), map.doors.size(), runs[0].mcl.mean, runs[1].mcl.mean,
+      runs[2].mcl.mean, runs[0].door_mcl.mean, runs[1].door_mcl.mean, runs[2].door_mcl.mean);
   return 0;
 }

@@ -14,27 +14,23 @@
 //      it into their union on the weighted average plane (Eq. 7-12).
 // As in the paper's §4 it runs four times, with range noise sigma 0, 0.005 and 0.02 m and with
 // non-planar objects added, and prints Table 1's accuracy against the simulator's true planes,
-// the plane reduction (extractions per map plane) and the data reduction of Table 5. Then it maps
-// real frames from ../shared/data when present: MRPT's plane-based-map demo (4 organised RGB-D
-// frames with camera poses) and PCL's stereo table scene (one frame).
+// the plane reduction (extractions per map plane) and the data reduction of Table 5.
 //
 // Run it as `08_geometric_map [--full]`: 160 x 120 frames and a 10-frame sequence by default,
 // 640 x 480 and 120 frames with --full. It writes 08_geometric_map.svg (top view) and .ply (the
 // map as a cloud) of the noise-free run; the last line printed is JSON. Variations of the
-// pipeline's settings are measured by tools/geometric_map_study.
+// pipeline's settings are measured by tools/geometric_map_study, and the same pipeline on real
+// RGB-D and stereo frames (MRPT's and PCL's) runs in tools/geometric_map_real_frames.
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
-#include <filesystem>
 #include <numbers>
 #include <optional>
 #include <random>
 #include <string>
 
-#include "rangenav/io/mrpt_pose.hpp"
-#include "rangenav/io/pcd.hpp"
 #include "rangenav/io/ply.hpp"
 #include "rangenav/io/svg.hpp"
 #include "rangenav/mapping/geometric_mapper.hpp"
@@ -172,87 +168,6 @@ std::string map_kitchen(const std::string& key, double sigma, bool objects, bool
   return buf;
 }
 
-/// A cloud from a camera's optical frame (x right, y down, z ahead) in its body frame (x ahead,
-/// y left, z up), as the mapper expects; and the body -> optical rotation.
-Transform3d body_to_optical() {
-  Transform3d t = Transform3d::Identity();
-  t.linear() << 0, -1, 0, 0, 0, -1, 1, 0, 0;
-  return t;
-}
-Cloud3d optical_to_body(Cloud3d cloud) {
-  const Transform3d t = body_to_optical().inverse();
-  for (auto& p : cloud.points)
-    p = t * p;
-  return cloud;
-}
-
-void print_shapes(const GeometricMap<double>& map) {
-  for (const auto& s : map.shapes()) {
-    const auto& pl = s.surface.plane;
-    std::printf(
-        "    shape %zu: n = (%+.3f, %+.3f, %+.3f), d = %+.3f m, area %.3f m^2, %zu vertices, %zu "
-        "holes, delta %.0f\n",
-        s.id, pl.normal.x(), pl.normal.y(), pl.normal.z(), pl.d, s.surface.area(),
-        s.surface.polygon.outer.size(), s.surface.polygon.holes.size(), s.delta);
-  }
-}
-
-/// The same pipeline on real frames; returns their JSON members.
-std::string real_data(const std::filesystem::path& dir) {
-  std::string json;
-  std::mt19937 rng(5);
-  if (std::filesystem::exists(dir / "mrpt_pbmap/pointcloud0.pcd")) {  // 4 frames with poses
-    GeometricMapperParams params;
-    params.key_frames.min_distance = params.key_frames.min_angle = 0.0;  // every frame
-    params.clustering.min_cluster_size = params.planes.min_inliers = 300;
-    params.planes.hull.alpha = 0.08;
-    params.planes.hull.resolution = 0.005;
-    GeometricMapper mapper(params);
-    std::size_t extracted = 0, merged = 0;
-    for (int k = 0; k < 4; ++k) {
-      const std::string n = std::to_string(k);
-      const Cloud3d cloud =
-          optical_to_body(io::read_pcd<double>(dir / ("mrpt_pbmap/pointcloud" + n + ".pcd")));
-      const Transform3d pose =
-          io::read_mrpt_pose(dir / ("mrpt_pbmap/pose" + n + ".mat")) * body_to_optical();
-      const GeometricFrameReport r = mapper.process(cloud, pose, rng);
-      const Transform3d correction = pose.inverse() * r.pose;
-      std::printf(
-          "mrpt_pbmap frame %d: %s, ICP correction %.3f m %.2f deg, %zu planes, %zu merged\n", k,
-          r.registered ? "registered" : "rejected", correction.translation().norm(),
-          rotation_angle(correction) * 180 / std::numbers::pi, r.planes.size(), r.merged);
-      extracted += r.planes.size();
-      merged += r.merged;
-    }
-    std::printf("  map: %zu shapes from %zu planes\n", mapper.map().size(), extracted);
-    print_shapes(mapper.map());
-    json += ", \"mrpt_pbmap\": {\"planes_extracted\": " + std::to_string(extracted) +
-            ", \"merged\": " + std::to_string(merged) +
-            ", \"map_planes\": " + std::to_string(mapper.map().size()) + "}";
-  }
-  const auto table = dir / "pcl_test/table_scene_mug_stereo_textured.pcd";
-  if (std::filesystem::exists(table)) {  // one 640 x 480 frame, no pose
-    GeometricMapperParams params;
-    params.clustering.min_cluster_size = params.planes.min_inliers = 2000;
-    params.clustering.tolerance = 0.02;
-    params.planes.distance_threshold = 0.015;
-    params.planes.hull.alpha = 0.03;
-    params.planes.hull.resolution = 0.002;
-    params.extraction_leaf = 0.005;  // a 5 mm voxel filter bounds the extraction's cost
-    GeometricMapper mapper(params);
-    const GeometricFrameReport r =
-        mapper.process(optical_to_body(io::read_pcd<double>(table)), Transform3d::Identity(), rng);
-    std::printf(
-        "table_scene_mug_stereo_textured: %zu points for extraction, %zu clusters, %zu planes, "
-        "%zu shapes after merging\n",
-        r.extraction_points, r.clusters, r.planes.size(), mapper.map().size());
-    print_shapes(mapper.map());
-    json += ", \"table_scene\": {\"planes_extracted\": " + std::to_string(r.planes.size()) +
-            ", \"map_planes\": " + std::to_string(mapper.map().size()) + "}";
-  }
-  return json;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -261,7 +176,6 @@ int main(int argc, char** argv) {
   json += ", " + map_kitchen("0.005", 0.005, false, full);
   json += ", " + map_kitchen("0.02", 0.02, false, full);
   json += ", " + map_kitchen("objects", 0.0, true, full);
-  json += real_data(RANGENAV_EXAMPLE_DATA_DIR);
   std::printf("%s}\n", json.c_str());
   return 0;
 }

@@ -132,6 +132,29 @@ TEST_CASE("Door-aware MCL: bad poses, odometry and door indices are invalid_argu
   DoorAwareMclParams params;
   params.sampling.min_particles = 50;
   params.sampling.max_particles = 500;
+  for (const auto& [what, bad] :
+       std::vector<std::pair<const char*, DoorModel>>{{"a NaN hinge",
+                                                       [&] {
+                                                         DoorModel d = door;
+                                                         d.hinge.x() = qnan;
+                                                         return d;
+                                                       }()},
+                                                      {"no leaf",
+                                                       [&] {
+                                                         DoorModel d = door;
+                                                         d.leaf_length = 0;
+                                                         return d;
+                                                       }()},
+                                                      {"an inverted range", [&] {
+                                                         DoorModel d = door;
+                                                         d.opening_min = 2;
+                                                         return d;
+                                                       }()}}) {
+    INFO(what);
+    const std::vector<DoorModel> bad_doors{door, bad};
+    CHECK_THAT(error_of<invalid_argument>([&] { DoorAwareMcl(grid, bad_doors, params); }),
+               Contains("DoorAwareMcl: argument 'doors[k]' = 1 needs a finite hinge"));
+  }
   DoorAwareMcl mcl(grid, doors, params);
   std::mt19937_64 rng(5);
   CHECK_THAT(error_of<invalid_argument>([&] { (void)mcl.estimate(); }),

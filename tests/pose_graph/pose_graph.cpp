@@ -45,10 +45,10 @@ void check_polygon_ring() {
     truth.push_back(truth.back() * planar(side, 0, 2 * pi / n));
   Graph graph;
   std::mt19937 rng(7);
-  for (int i = 0; i < n; ++i)
+  for (std::size_t i = 0; i < truth.size(); ++i)
     graph.add_node(i == 0 ? truth[0] : perturbed<D>(truth[i], 0.2, 0.1, rng));
-  for (int i = 0; i < n; ++i)
-    graph.add_edge(i, (i + 1) % n, planar(side, 0, alpha), information);
+  for (std::size_t i = 0; i < truth.size(); ++i)
+    graph.add_edge(i, (i + 1) % truth.size(), planar(side, 0, alpha), information);
 
   const auto result = graph.optimize();
   REQUIRE(result.converged());
@@ -81,10 +81,10 @@ TEST_CASE("pose graph: consistent measurements around a circle recover the true 
   }
   PoseGraph2d graph;
   std::mt19937 rng(3);
-  for (int i = 0; i < n; ++i)
+  for (std::size_t i = 0; i < truth.size(); ++i)
     graph.add_node(i == 0 ? truth[0] : perturbed<2>(truth[i], 0.5, 0.3, rng));
-  for (int i = 0; i < n; ++i) {
-    const int j = (i + 1) % n;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    const std::size_t j = (i + 1) % truth.size();
     graph.add_edge(i, j, truth[i].inverse() * truth[j], PoseGraph2d::Information::Identity());
   }
   const auto result = graph.optimize();
@@ -295,7 +295,7 @@ TEST_CASE("pose graph: fixed nodes stay, and each unanchored part keeps its firs
     const std::size_t first = graph.node_count();
     for (int i = 0; i < 6; ++i)
       graph.add_node(perturbed<2>(make_transform2(10.0 * ring + i, 0.0, 0.0), 0.1, 0.05, noise));
-    for (int i = 0; i < 6; ++i)
+    for (std::size_t i = 0; i < 6; ++i)
       graph.add_edge(first + i, first + (i + 1) % 6,
                      i < 5 ? make_transform2(1.0, 0.0, 0.0) : make_transform2(-5.0, 0.0, 0.0),
                      PoseGraph2d::Information::Identity());

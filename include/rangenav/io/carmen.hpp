@@ -77,41 +77,44 @@
 
 namespace rangenav::io {
 
+/// The record a CarmenLaser came from. Each is a separate laser for the saturation rule and the
+/// maximum-range precedence described at the top of this file.
 enum class CarmenLaserType {
-  flaser,
-  rlaser,
-  robotlaser1,
-  rawlaser1,
-  rawlaser2,
-  rawlaser3,
-  rawlaser4
+  flaser,       ///< FLASER: front laser, beam layout guessed from the beam count
+  rlaser,       ///< RLASER: rear laser, beam layout guessed from the beam count
+  robotlaser1,  ///< ROBOTLASER1: laser with its own layout, laser pose and robot pose
+  rawlaser1,    ///< RAWLASER1: laser 1 with its own layout, no pose
+  rawlaser2,    ///< RAWLASER2: laser 2 with its own layout, no pose
+  rawlaser3,    ///< RAWLASER3: laser 3 with its own layout, no pose
+  rawlaser4     ///< RAWLASER4: laser 4 with its own layout, no pose
 };
 
 /// One laser record: the scan plus the poses the record carries.
 struct CarmenLaser {
-  CarmenLaserType type{CarmenLaserType::flaser};
-  LaserScan<double> scan;            ///< scan.timestamp() is the ipc timestamp
+  CarmenLaserType type{CarmenLaserType::flaser};  ///< the record tag the scan came from
+  LaserScan<double> scan;                         ///< scan.timestamp() is the ipc timestamp
   std::optional<Pose2d> laser_pose;  ///< FLASER/RLASER "x y theta", ROBOTLASER1 laser pose
   std::optional<Pose2d> odom_pose;   ///< FLASER/RLASER "odom_x odom_y odom_theta",
                                      ///< ROBOTLASER1 robot pose
   double timestamp{0.0};             ///< ipc timestamp (s)
-  std::string host;
-  double logger_timestamp{0.0};  ///< logger timestamp (s)
-  std::size_t line{0};           ///< 1-based line in the log
+  std::string host;                  ///< host name field of the record (not interpreted)
+  double logger_timestamp{0.0};      ///< logger timestamp (s)
+  std::size_t line{0};               ///< 1-based line in the log
 };
 
 /// One ODOM record.
 struct CarmenOdometry {
-  Pose2d pose;
-  double tv{0.0};     ///< translational velocity (m/s)
-  double rv{0.0};     ///< rotational velocity (rad/s)
-  double accel{0.0};  ///< acceleration (m/s^2)
-  double timestamp{0.0};
-  std::string host;
-  double logger_timestamp{0.0};
-  std::size_t line{0};
+  Pose2d pose;                   ///< odometry pose "x y theta" (m, m, rad) in the odometry frame
+  double tv{0.0};                ///< translational velocity (m/s)
+  double rv{0.0};                ///< rotational velocity (rad/s)
+  double accel{0.0};             ///< acceleration (m/s^2)
+  double timestamp{0.0};         ///< ipc timestamp (s)
+  std::string host;              ///< host name field of the record (not interpreted)
+  double logger_timestamp{0.0};  ///< logger timestamp (s)
+  std::size_t line{0};           ///< 1-based line in the log
 };
 
+/// One record of the log in file order: a laser scan or an odometry reading.
 using CarmenRecord = std::variant<CarmenLaser, CarmenOdometry>;
 
 /// How the reader builds scans; see the maximum-range precedence and the saturation rule at the

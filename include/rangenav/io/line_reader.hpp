@@ -98,9 +98,11 @@ class LineReader {
   [[nodiscard]] bool line_terminated() const {
     return terminated_;
   }
+  /// True when the file is gzip-compressed (recognised by its magic bytes, not its name).
   [[nodiscard]] bool is_gzip() const {
     return gzip_;
   }
+  /// The file being read, as given to the constructor (used in error messages).
   [[nodiscard]] const std::filesystem::path& path() const {
     return path_;
   }

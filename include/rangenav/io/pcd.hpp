@@ -40,7 +40,7 @@ enum class PcdFormat { ascii, binary, binary_compressed };
 
 /// One FIELDS entry with its SIZE, TYPE and COUNT.
 struct PcdField {
-  std::string name;
+  std::string name;       ///< e.g. "x", "y", "z", "intensity", "normal_x"
   std::size_t size = 4;   ///< bytes per element: 1, 2, 4 or 8
   char type = 'F';        ///< 'I' signed integer, 'U' unsigned integer, 'F' floating point
   std::size_t count = 1;  ///< elements per point
@@ -48,15 +48,15 @@ struct PcdField {
 
 /// A parsed PCD header.
 struct PcdHeader {
-  std::string version;
-  std::vector<PcdField> fields;
-  std::size_t width = 0;
-  std::size_t height = 1;
+  std::string version;           ///< the VERSION value as written, e.g. "0.7"
+  std::vector<PcdField> fields;  ///< FIELDS with their SIZE, TYPE and COUNT, in file order
+  std::size_t width = 0;         ///< WIDTH: points per row (all points for an unorganised cloud)
+  std::size_t height = 1;        ///< HEIGHT: rows; 1 for an unorganised cloud
   std::array<double, 7> viewpoint{0, 0, 0, 1, 0, 0, 0};  ///< tx ty tz qw qx qy qz
-  std::size_t points = 0;
-  PcdFormat data = PcdFormat::ascii;
-  std::size_t data_offset = 0;  ///< byte offset of the data after the DATA line
-  std::size_t data_line = 0;    ///< line number of the DATA line
+  std::size_t points = 0;             ///< POINTS: number of points, WIDTH * HEIGHT
+  PcdFormat data = PcdFormat::ascii;  ///< the DATA line's encoding
+  std::size_t data_offset = 0;        ///< byte offset of the data after the DATA line
+  std::size_t data_line = 0;          ///< line number of the DATA line
 
   /// Bytes per point in DATA binary.
   [[nodiscard]] std::size_t point_size() const {

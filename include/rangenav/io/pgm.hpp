@@ -26,8 +26,8 @@ namespace rangenav::io {
 
 /// A grayscale image, row-major, row 0 at the top (as stored in the file).
 struct GrayImage {
-  std::size_t width{0};
-  std::size_t height{0};
+  std::size_t width{0};               ///< pixels per row (columns)
+  std::size_t height{0};              ///< rows
   std::uint16_t max_value{255};       ///< the file's maxval (1 ... 65535)
   std::vector<std::uint16_t> pixels;  ///< width * height values in [0, max_value]
 

@@ -77,8 +77,10 @@ struct RelationErrors {
 /// The metric over all relations, and over the relations whose timestamps are less than
 /// `local_gap` apart ("short": local accuracy) or not ("long": mostly loop closures).
 struct RelationEvaluation {
-  RelationErrors all, short_gap, long_gap;
-  std::size_t missing{0};  ///< relations with a timestamp the trajectory has no pose for
+  RelationErrors all;        ///< every relation matched to the trajectory
+  RelationErrors short_gap;  ///< relations less than `local_gap` apart: local accuracy
+  RelationErrors long_gap;   ///< the others: mostly loop closures, global consistency
+  std::size_t missing{0};    ///< relations with a timestamp the trajectory has no pose for
 };
 
 /// Evaluates a trajectory given as poses at `timestamps` (increasing) against `relations`. A

@@ -167,6 +167,8 @@ inline void append_number(std::string& out, double value, int decimals) {
 /// An SVG drawing assembled from shapes in world coordinates (see the file comment).
 class SvgDrawing {
  public:
+  /// An empty drawing; throws invalid_argument for a negative margin, or a size_px that is not
+  /// finite or too small for the margins (< 2 * margin_px + 10).
   explicit SvgDrawing(SvgOptions options = {}) : options_(std::move(options)) {
     rangenav::detail::require_non_negative("SvgDrawing", "options.margin_px", options_.margin_px);
     if (!(std::isfinite(options_.size_px) && options_.size_px >= 2 * options_.margin_px + 10))
@@ -177,7 +179,7 @@ class SvgDrawing {
   }
 
   /// Starts the layer `name`, or selects it again if it exists: later shapes go into it. Layers
-  /// are written (and stacked) in the order they were first named, as <g id="name">; shapes
+  /// are written (and stacked) in the order they were first named, as `<g id="name">`; shapes
   /// drawn before the first call go into an unnamed bottom layer that the legend leaves out.
   SvgDrawing& layer(std::string name) {
     if (name.empty())
@@ -315,6 +317,7 @@ class SvgDrawing {
 
   /// Number of SVG elements the shapes drawn so far become (scale bar and legend excluded).
   [[nodiscard]] std::size_t element_count() const { return elements_.size(); }
+  /// True when no shape has been drawn yet.
   [[nodiscard]] bool empty() const { return elements_.empty(); }
 
   /// The SVG document.

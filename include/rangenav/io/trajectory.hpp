@@ -32,14 +32,14 @@ namespace rangenav::io {
 
 /// A planar pose with its timestamp (s).
 struct StampedPose2d {
-  double timestamp{0.0};
-  Pose2d pose;
+  double timestamp{0.0};  ///< time of the pose (s)
+  Pose2d pose;            ///< x, y (m) and heading theta (rad)
 };
 
 /// A 3D rigid transform with its timestamp (s).
 struct StampedTransform3d {
-  double timestamp{0.0};
-  Transform3d pose{Transform3d::Identity()};
+  double timestamp{0.0};                      ///< time of the pose (s)
+  Transform3d pose{Transform3d::Identity()};  ///< the rigid transform (translation in m)
 };
 
 namespace detail {
@@ -236,6 +236,8 @@ inline void write_tum(const std::filesystem::path& path, std::span<const double>
   detail::close_checked(out, path, "write_tum");
 }
 
+/// Writes planar poses as a TUM file (z = 0, rotation about z); throws io_error when the file
+/// cannot be written.
 inline void write_tum(const std::filesystem::path& path, std::span<const double> timestamps,
                       std::span<const Pose2d> poses) {
   auto out = detail::open_for_writing(path, "write_tum");
@@ -243,6 +245,7 @@ inline void write_tum(const std::filesystem::path& path, std::span<const double>
   detail::close_checked(out, path, "write_tum");
 }
 
+/// Writes a stamped trajectory as a TUM file; throws io_error when the file cannot be written.
 inline void write_tum(const std::filesystem::path& path,
                       std::span<const StampedTransform3d> trajectory) {
   auto out = detail::open_for_writing(path, "write_tum");
@@ -295,6 +298,7 @@ inline void write_xytheta(std::ostream& out, std::span<const double> timestamps,
   }
 }
 
+/// Writes a stamped planar trajectory as "t x y theta" lines.
 inline void write_xytheta(std::ostream& out, std::span<const StampedPose2d> trajectory) {
   std::vector<double> timestamps;
   std::vector<Pose2d> poses;
@@ -307,6 +311,7 @@ inline void write_xytheta(std::ostream& out, std::span<const StampedPose2d> traj
   write_xytheta(out, timestamps, poses);
 }
 
+/// Writes "t x y theta" lines to a file; throws io_error when the file cannot be written.
 inline void write_xytheta(const std::filesystem::path& path, std::span<const double> timestamps,
                           std::span<const Pose2d> poses) {
   auto out = detail::open_for_writing(path, "write_xytheta");
@@ -314,6 +319,8 @@ inline void write_xytheta(const std::filesystem::path& path, std::span<const dou
   detail::close_checked(out, path, "write_xytheta");
 }
 
+/// Writes a stamped planar trajectory to a file; throws io_error when the file cannot be
+/// written.
 inline void write_xytheta(const std::filesystem::path& path,
                           std::span<const StampedPose2d> trajectory) {
   auto out = detail::open_for_writing(path, "write_xytheta");

@@ -108,7 +108,8 @@ struct DoorAwareObservation {
 /// (paper 001 §IV, Rao-Blackwellised over the door states).
 class DoorAwareMcl {
  public:
-  /// `grid` is the static map with the doors removed (remove_doors()); `doors` the detected doors.
+  /// `grid` is the static map with the doors removed (remove_doors()); `doors` the detected doors
+  /// (at most max_tracked_doors, each with finite values and a positive leaf length).
   DoorAwareMcl(const OccupancyGrid& grid, std::span<const DoorModel> doors,
                const DoorAwareMclParams& params = {})
       : params_(params),
@@ -119,6 +120,16 @@ class DoorAwareMcl {
     if (doors_.size() > max_tracked_doors)
       detail::throw_invalid_argument("DoorAwareMcl", "doors.size()", doors_.size(),
                                      "must be <= " + std::to_string(max_tracked_doors));
+    for (std::size_t k = 0; k < doors_.size(); ++k) {
+      const DoorModel& d = doors_[k];
+      if (!(d.hinge.allFinite() && std::isfinite(d.reference_angle) &&
+            std::isfinite(d.opening_min) && std::isfinite(d.opening_max) &&
+            d.opening_min <= d.opening_max && std::isfinite(d.leaf_length) && d.leaf_length > 0))
+        detail::throw_invalid_argument(
+            "DoorAwareMcl", "doors[k]", k,
+            "needs a finite hinge and reference angle, opening_min <= opening_max (finite) and "
+            "a finite leaf_length > 0");
+    }
     build_cell_tables(grid);
   }
 

@@ -18,7 +18,7 @@
 //     when they disagree (odometry that froze, then jumped);
 //   - an ICP whose solver takes model normals (PointToLineSolver) gets the map's normals.
 // On the MIT CSAIL benchmark log these cut the mean relation error from 0.48 m to 0.06 m
-// (figures and the settings tried in benchmarks/README.md).
+// (figures and the command in docs/benchmarks.md).
 
 #include <algorithm>
 #include <cmath>
@@ -46,9 +46,13 @@
 
 namespace rangenav {
 
+/// Settings of an IncrementalMapper; the defaults are the papers' (see laser_slam_params() for
+/// real 2D laser logs).
 template <std::floating_point Scalar = double>
 struct IncrementalMapperParams {
+  /// When a scan is inserted into the map (default: moved 0.5 m or turned 25°).
   KeyFrameParams<Scalar> key_frames{};
+  /// The sparse point map's density bound eps_D (default 0.15 m), index and normals.
   SparsePointMapParams<Scalar> map{};
   /// Registrations with fitness (fraction of scan points matched within the final distance)
   /// below this are rejected (paper 004 §3.2).
@@ -62,6 +66,7 @@ struct IncrementalMapperParams {
   /// A registration that moves the pose farther than this from the odometry guess is rejected
   /// (a gross mismatch: between two scans odometry is off by centimetres, not metres). m, rad.
   Scalar max_correction_distance = std::numeric_limits<Scalar>::infinity();
+  /// Angle limit of the same test (rad); default: no limit.
   Scalar max_correction_angle = std::numeric_limits<Scalar>::infinity();
   /// Edge of the voxel filter applied to each scan before matching; 0 = no filter.
   Scalar voxel_size = Scalar(0);
@@ -79,6 +84,7 @@ struct IncrementalMapperParams {
   /// With match_previous_scan: when the constant-velocity guess (the last scan's motion again)
   /// differs from the odometry guess by more than this, both are tried (m, rad).
   Scalar hypothesis_distance = Scalar(0.1);
+  /// Angle threshold of the same test (rad, default 5°).
   Scalar hypothesis_angle = Scalar(5) * std::numbers::pi_v<Scalar> / 180;
   /// The odometry's noise model. When set, every accepted registration is fused with the
   /// odometry prediction by information (pose_uncertainty.hpp's fuse()): along the directions
@@ -97,6 +103,7 @@ struct IncrementalMapperParams {
   /// odometry that froze and jumped is then not averaged into a good match.
   Scalar odometry_gate_chi2 = Scalar(16.27);
 
+  /// Throws invalid_argument naming the first parameter out of range.
   void validate() const {
     key_frames.validate();
     map.validate();
@@ -125,6 +132,7 @@ struct MapperUpdate {
   std::optional<IcpResult<D, Scalar>> icp;  ///< absent for the first scan
   bool registration_accepted = false;       ///< false: the pose is the odometry guess
   bool key_frame = false;                   ///< the scan was inserted into the map
+  /// What the key frame's insertion stored (zero when the scan was no key frame).
   SparseInsertStats inserted{};
   /// With IncrementalMapperParams::odometry_noise: the information of `pose` relative to the
   /// map (body-frame perturbation, pose_uncertainty.hpp): the registration's fused with the
@@ -134,24 +142,32 @@ struct MapperUpdate {
   bool odometry_fused = false;
 };
 
-/// `Index` is the map's search structure (SparsePointMap's third parameter).
+/// Incremental registration of scans against a sparse point map (see the file comment): every
+/// scan gets a pose, key frames extend the map. `IcpType` is the scan-to-map ICP (the papers'
+/// by default); `Index` is the map's search structure (SparsePointMap's third parameter).
 template <int D, std::floating_point Scalar = double, class IcpType = PaperIcp<D, Scalar>,
           class Index = DefaultMapIndex<D, Scalar>>
 class IncrementalMapper {
  public:
+  /// A scan's pose: scan (robot) frame -> map frame.
   using transform_type = Transform<D, Scalar>;
+  /// A point of a scan or of the map.
   using point_type = Point<D, Scalar>;
 
+  /// The scan-to-scan ICP of match_previous_scan.
   using previous_scan_icp_type = Icp<D, Scalar, DecayingDistanceRejector<Scalar>>;
   /// Whether IcpType's solver uses model normals (then the map keeps them).
   static constexpr bool uses_normals =
       ModelNormalSolver<std::remove_cvref_t<decltype(std::declval<IcpType&>().solver)>, D, Scalar>;
 
+  /// The settings; validated by the constructor (later changes are not re-checked).
   IncrementalMapperParams<Scalar> params;
   IcpType icp{};  ///< public typed policy: configure its rejectors and parameters directly
   /// The scan-to-scan ICP of match_previous_scan (decaying threshold 1.0 -> 0.1 m).
   previous_scan_icp_type previous_scan_icp{};
 
+  /// An empty map; the first scan will define the map frame. Throws invalid_argument for bad
+  /// params (IncrementalMapperParams::validate()).
   explicit IncrementalMapper(IncrementalMapperParams<Scalar> p = {})
       : params(p), map_((p.validate(), with_normals(p.map))), key_frames_(p.key_frames) {
     if constexpr (requires { icp.template rejector<DecayingDistanceRejector<Scalar>>(); }) {
@@ -334,8 +350,11 @@ class IncrementalMapper {
     return update;
   }
 
+  /// The map built so far (the key frames' points, map frame).
   [[nodiscard]] const SparsePointMap<D, Scalar, Index>& map() const { return map_; }
+  /// The last scan's pose in the map frame (identity before the first scan).
   [[nodiscard]] const transform_type& pose() const { return pose_; }
+  /// Number of scans given to the mapper so far.
   [[nodiscard]] std::size_t scans_processed() const { return scans_; }
   /// The finite (voxel-filtered, with voxel_size) points of the last scan, in the robot frame:
   /// what a key frame inserts into the map.
@@ -420,7 +439,7 @@ template <std::floating_point Scalar = double>
 using LaserIcp = BasicIcp<2, Scalar, PointToLineSolver<Scalar>, DecayingDistanceRejector<Scalar>>;
 
 /// The documented configuration for 2D laser SLAM (the best found on the MIT CSAIL benchmark
-/// log, 0.062 m mean relation error without loop closure; the sweep is in benchmarks/README.md):
+/// log, 0.062 m mean relation error without loop closure; figures in docs/benchmarks.md):
 /// scan-to-scan pre-alignment with the constant-velocity hypothesis, point-to-line map
 /// registration with a 0.5 -> 0.2 m threshold, key frames every 0.25 m / 10°, eps_D = 0.15 m,
 /// and map corrections of the scan-to-scan result above 0.5 m / 3° rejected (the scan-to-scan

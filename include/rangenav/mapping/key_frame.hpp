@@ -13,11 +13,14 @@
 
 namespace rangenav {
 
+/// When a pose becomes a key frame: after moving min_distance or turning min_angle (the papers'
+/// 50 cm and 25°).
 template <std::floating_point Scalar = double>
 struct KeyFrameParams {
   Scalar min_distance = Scalar(0.5);                                 ///< m
   Scalar min_angle = Scalar(25) * std::numbers::pi_v<Scalar> / 180;  ///< rad
 
+  /// Throws invalid_argument for a negative (or NaN) min_distance or min_angle.
   void validate() const {
     detail::require_non_negative("KeyFrameParams", "min_distance", min_distance);
     detail::require_non_negative("KeyFrameParams", "min_angle", min_angle);
@@ -28,6 +31,7 @@ struct KeyFrameParams {
 template <int D, std::floating_point Scalar = double>
 class KeyFrameSelector {
  public:
+  /// No key frame yet; throws invalid_argument for bad params (KeyFrameParams::validate()).
   explicit KeyFrameSelector(KeyFrameParams<Scalar> params = {}) : params_(params) {
     params_.validate();
   }
@@ -40,6 +44,7 @@ class KeyFrameSelector {
     return delta.translation().norm() > params_.min_distance ||
            std::abs(rotation_angle(delta)) > params_.min_angle;
   }
+  /// Records `pose` as the last key frame.
   void accept(const Transform<D, Scalar>& pose) { last_ = pose; }
   /// is_key_frame() followed by accept() when true.
   bool update(const Transform<D, Scalar>& pose) {
@@ -47,7 +52,9 @@ class KeyFrameSelector {
     accept(pose);
     return true;
   }
+  /// The last key frame's pose; empty before the first.
   [[nodiscard]] const std::optional<Transform<D, Scalar>>& last() const { return last_; }
+  /// The thresholds the selector was built with.
   [[nodiscard]] const KeyFrameParams<Scalar>& params() const { return params_; }
 
  private:

@@ -83,6 +83,7 @@ struct LoopClosureParams {
   /// Bounds of the linear half-window (m): at least the ICP's pairing basin; at most what the
   /// correlative search affords per candidate (the angular half-window is bounded by π).
   Scalar min_window_linear = Scalar(0.5);
+  /// Upper bound of the linear half-window (m), see min_window_linear.
   Scalar max_window_linear = Scalar(10);
   /// Lower bound of the angular half-window (rad).
   Scalar min_window_angular = Scalar(5) * std::numbers::pi_v<Scalar> / 180;
@@ -99,6 +100,8 @@ struct LoopClosureParams {
   /// A second pose farther than `ambiguity_distance` (m) from the best that scores at least
   /// this fraction of the best makes the match ambiguous (rejected).
   Scalar ambiguity_ratio = Scalar(0.9);
+  /// Distance from the best pose beyond which a high-scoring second pose counts as a rival (m),
+  /// see ambiguity_ratio.
   Scalar ambiguity_distance = Scalar(1);
   /// Minimum fraction of the scan the refining ICP pairs with the submap.
   Scalar min_fitness = Scalar(0.5);
@@ -106,6 +109,7 @@ struct LoopClosureParams {
   /// two matchers disagree. 2D: two grid cells; the angle: two of the matcher's finest steps at
   /// 5 m, floored at 2°.
   Scalar max_refinement_distance = Scalar(0.3);
+  /// Angle limit of the same test (rad), see max_refinement_distance.
   Scalar max_refinement_angle = Scalar(3) * std::numbers::pi_v<Scalar> / 180;
   /// Residual σ floor of a loop edge's information (m); see IncrementalMapperParams.
   Scalar sensor_sigma = Scalar(0.01);
@@ -141,10 +145,13 @@ struct LoopClosureParams {
 /// A loop closure: the pose of key frame `node` in the frame of submap `submap`'s anchor node.
 template <int D, class Scalar = double>
 struct LoopClosure {
+  /// Index of the matched submap.
   std::size_t submap = 0;
   std::size_t anchor = 0;                                            ///< the submap's anchor node
   std::size_t node = 0;                                              ///< the key frame's node
   Transform<D, Scalar> relative = Transform<D, Scalar>::Identity();  ///< anchor -> node
+  /// Information of `relative` (body-frame perturbation, pose_uncertainty.hpp): the refining
+  /// ICP's, widened by the submap's own internal drift.
   lie::PoseMatrix<D, Scalar> information = lie::PoseMatrix<D, Scalar>::Identity();
   Scalar score = 0;    ///< correlative score (2D), 0 in 3D
   Scalar fitness = 0;  ///< the refining ICP's

@@ -16,8 +16,7 @@
 // neighbourhood an insertion changed. PointToLineSolver uses them (an option beyond the papers).
 // Each point keeps the indices of its k nearest, so a refreshed point's new k nearest are
 // merged from them and the new points that came within its k-th neighbour's distance, without
-// a k-NN query (same neighbours as the query's; on bench_geometric_map's key frame 384 k-NN
-// queries fewer, registration 58.7 -> 57.8 M instructions).
+// a k-NN query (the same neighbours as the query's, found without searching the map).
 //
 // Memory: one stored point costs sizeof(Point<D, Scalar>) (16 B in 2D, 24 B in 3D for double)
 // plus the kd-tree's index (4 B) and nodes (about 2 nodes of ~40-60 B per 10-point leaf), i.e.
@@ -45,9 +44,12 @@
 
 namespace rangenav {
 
+/// Settings of a SparsePointMap: the density bound eps_D, the index, and the optional normals.
 template <std::floating_point Scalar = double>
 struct SparsePointMapParams {
   Scalar epsilon_d = Scalar(0.15);  ///< m, eps_D of Eq. (5); paper 000 Fig. 3 uses 15 cm
+  /// Also thin a scan's new points among themselves, so one dense scan stores one point per
+  /// eps_D ball; false gives the literal Eq. (5), which only compares with the map before it.
   bool deduplicate_within_scan = true;
   KdTreeParams tree{};                 ///< of a GrowingKdTree index
   GridIndexParams<Scalar> grid{};      ///< of a GridIndex2 index
@@ -56,6 +58,8 @@ struct SparsePointMapParams {
   Scalar normal_radius = Scalar(0.5);  ///< m, neighbours farther away are not used
   Scalar max_flatness = Scalar(0.1);   ///< eigenvalue ratio above which the normal is zero
 
+  /// Throws invalid_argument naming the first bad field: epsilon_d not > 0, a bad grid, or (with
+  /// normals) normal_neighbors < 2, normal_radius not > 0 or max_flatness < 0.
   void validate() const {
     constexpr std::string_view where = "SparsePointMap";
     detail::require_positive(where, "epsilon_d", epsilon_d);
@@ -80,16 +84,19 @@ struct SparseInsertStats {
 template <int D, class Scalar>
 using DefaultMapIndex = std::conditional_t<D == 2, GridIndex2<Scalar>, GrowingKdTree<D, Scalar>>;
 
+/// A point map of bounded density (Eq. (5), see the file comment) that is directly an ICP model:
+/// search() is the index the insertions test against. D is 2 or 3; `Index` is any index with
+/// incremental insertion (GridIndex2, GrowingKdTree, or one of the same interface).
 template <int D, std::floating_point Scalar = double, class Index = DefaultMapIndex<D, Scalar>>
 class SparsePointMap {
  public:
-  static constexpr int dimension = D;
-  using scalar_type = Scalar;
-  using index_type = Index;
-  using point_type = Point<D, Scalar>;
-  using transform_type = Transform<D, Scalar>;
+  static constexpr int dimension = D;           ///< 2 or 3
+  using scalar_type = Scalar;                   ///< coordinate type
+  using index_type = Index;                     ///< the search structure search() returns
+  using point_type = Point<D, Scalar>;          ///< a stored point (map frame, m)
+  using transform_type = Transform<D, Scalar>;  ///< a scan's pose, scan frame -> map frame
 
-  /// Throws invalid_argument when epsilon_d is not finite and > 0.
+  /// Throws invalid_argument for bad params (see SparsePointMapParams::validate()).
   explicit SparsePointMap(SparsePointMapParams<Scalar> params = {})
       : params_((params.validate(), params)), tree_(make_index(params)) {}
 
@@ -140,16 +147,20 @@ class SparsePointMap {
 
   /// The map as a search structure (an ICP model).
   [[nodiscard]] const Index& search() const { return tree_; }
+  /// The stored points (map frame), in insertion order; indices match the index's.
   [[nodiscard]] const std::vector<point_type>& points() const { return tree_.points(); }
   /// Unit normals of the stored points (zero where there is no line / plane), indexed like
   /// points(); empty unless SparsePointMapParams::normals.
   [[nodiscard]] const std::vector<point_type>& normals() const { return normals_; }
+  /// Number of stored points.
   [[nodiscard]] std::size_t size() const { return tree_.size(); }
+  /// True before the first point is stored.
   [[nodiscard]] bool empty() const { return tree_.empty(); }
   /// Finite points offered to insert() so far.
   [[nodiscard]] std::size_t points_offered() const { return offered_; }
   /// Bytes held by the stored points and the search structure.
   [[nodiscard]] std::size_t memory_bytes() const { return tree_.memory_bytes(); }
+  /// The settings the map was built with.
   [[nodiscard]] const SparsePointMapParams<Scalar>& params() const { return params_; }
 
  private:

@@ -126,7 +126,9 @@ template <std::floating_point Scalar = double>
 struct PoseGraphOptions {
   /// Maximum number of Levenberg-Marquardt steps tried (accepted or not).
   int max_iterations = 100;
-  /// Stop when an accepted step lowers the cost F by less than this fraction of F.
+  /// Stop when a step lowers the cost F by less than this fraction of F, or when the
+  /// Gauss-Newton decrement −gᵀH⁻¹g (what one more step can gain, estimated with the last
+  /// factorisation near the minimum) is below this fraction of F.
   Scalar function_tolerance = Scalar(1e-8);
   /// Stop when the largest entry of an accepted step is below this (metres / radians).
   Scalar step_tolerance = Scalar(1e-12);
@@ -164,9 +166,11 @@ struct PoseGraphResult {
   Scalar chi2_final{0};    ///< Σ eᵀΩe after
   Scalar cost_initial{0};  ///< F = Σ ρ(eᵀΩe) before (the minimised cost)
   Scalar cost_final{0};    ///< F after
-  int iterations{0};       ///< steps tried (each one a factorisation and a solve)
+  int iterations{0};       ///< steps tried
   int accepted_steps{0};   ///< steps that lowered the cost
+  int factorizations{0};   ///< numeric factorisations of the normal equations
   bool cholmod{false};     ///< true when CHOLMOD factored the normal equations (see backend)
+  /// Why the optimiser stopped (see PoseGraphTermination).
   PoseGraphTermination termination{PoseGraphTermination::nothing_to_optimize};
 
   /// True when the optimiser stopped at a minimum (cost or step tolerance reached, or nothing to
@@ -199,7 +203,9 @@ class PoseGraph {
   using EdgeId = std::size_t;
   /// An edge's loss.
   using Loss = PoseGraphLoss<Scalar>;
+  /// The optimiser's settings (see PoseGraphOptions for their defaults).
   using Options = PoseGraphOptions<Scalar>;
+  /// What optimize() returns.
   using Result = PoseGraphResult<Scalar>;
 
   /// A relative-pose measurement: the pose of node `to` in the frame of node `from`.
@@ -327,6 +333,9 @@ class PoseGraph {
     Scalar lambda = options.initial_lambda;
     Scalar nu = Scalar(2);
     bool linearized = false;
+    // True while the last factorisation is of a nearly undamped H whose quadratic model predicted
+    // its step well: near the minimum it then also serves the next linearisation (below).
+    bool factor_current = false;
     while (result.iterations < options.max_iterations) {
       if (current.cost == Scalar(0)) {
         result.termination = PoseGraphTermination::converged_cost;
@@ -335,8 +344,29 @@ class PoseGraph {
       if (!linearized) {
         linearize();
         linearized = true;
+        if (factor_current) {
+          // The Gauss-Newton decrement −gᵀδ with δ = −H⁻¹g from the previous factor of H, one
+          // back-substitution: what one more step can still gain. Below the tolerance the
+          // optimiser stops after taking that step (if it lowers the cost) instead of paying a
+          // factorisation to learn that the next decrease is negligible.
+          system_.solve(step_);
+          if (system_.rhs_dot(step_) <= options.function_tolerance * current.cost) {
+            ++result.iterations;
+            apply_step(candidate_);
+            const Evaluation next = evaluate(candidate_);
+            if (std::isfinite(next.cost) && next.cost < current.cost) {
+              poses_.swap(candidate_);
+              current = next;
+              ++result.accepted_steps;
+            }
+            result.termination = PoseGraphTermination::converged_cost;
+            break;
+          }
+        }
       }
       ++result.iterations;
+      ++result.factorizations;
+      factor_current = false;
       system_.damp(lambda, Scalar(1e-6));
       if (!system_.factorize()) {
         lambda *= nu;
@@ -358,6 +388,7 @@ class PoseGraph {
         poses_.swap(candidate_);
         ++result.accepted_steps;
         linearized = false;
+        factor_current = gain > Scalar(0.75) && lambda <= Scalar(1e-6);
         const Scalar previous_cost = current.cost;
         current = next;
         const Scalar g = Scalar(2) * gain - Scalar(1);
@@ -372,6 +403,13 @@ class PoseGraph {
           break;
         }
       } else {
+        // A rejected nearly undamped step whose predicted gain is below the tolerance: at the
+        // minimum, where rounding decides the sign of so small a change.
+        if (std::isfinite(next.cost) && lambda <= Scalar(1e-6) &&
+            predicted <= options.function_tolerance * current.cost) {
+          result.termination = PoseGraphTermination::converged_cost;
+          break;
+        }
         // A rejected step so small that the cost cannot tell it apart: at the minimum.
         if (std::isfinite(next.cost) && step_.cwiseAbs().maxCoeff() <= options.step_tolerance) {
           result.termination = PoseGraphTermination::converged_step;

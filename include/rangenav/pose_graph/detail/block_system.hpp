@@ -13,9 +13,9 @@
 //
 // Where SuiteSparse's CHOLMOD is available (RANGENAV_HAVE_CHOLMOD, target rangenav::cholmod), a
 // pattern whose factorisation costs many flops per entry of L (CHOLMOD's own test for when a
-// supernodal factorisation pays: flops ≥ supernodal_switch·nnz(L), typical of 3D graphs) is
-// factored by CHOLMOD's supernodal Cholesky instead, with CHOLMOD's ordering; both are exact,
-// so the results agree to rounding.
+// supernodal factorisation pays: flops ≥ supernodal_switch·nnz(L), typical of large 3D graphs,
+// judged on the block graph) is factored by CHOLMOD's supernodal Cholesky instead, with
+// CHOLMOD's ordering; both are exact, so the results agree to rounding.
 
 #include <Eigen/Core>
 #include <Eigen/OrderingMethods>
@@ -110,7 +110,8 @@ class BlockSystem {
         floor_(other.floor_),
         rhs_(other.rhs_),
         use_cholmod_(other.use_cholmod_) {
-    if (matrix_.rows() > 0) analyze(use_cholmod_ ? SparseBackend::cholmod : SparseBackend::eigen);
+    if (matrix_.rows() > 0)
+      analyze(use_cholmod_ ? SparseBackend::cholmod : SparseBackend::eigen, {});
   }
   BlockSystem& operator=(const BlockSystem& other) {
     if (this != &other) {
@@ -185,7 +186,7 @@ class BlockSystem {
     }
     diagonal_values_.resize(n);
     rhs_.resize(n);
-    if (n > 0) analyze(backend);
+    if (n > 0) analyze(backend, rows);
   }
 
   [[nodiscard]] std::size_t nodes() const { return nodes_; }
@@ -323,27 +324,56 @@ class BlockSystem {
     bool transposed;
   };
 
-  // Symbolic analysis by the chosen backend (see the file comment).
-  void analyze(SparseBackend backend) {
+  // Symbolic analysis by the chosen backend (see the file comment). `rows` lists the block rows
+  // of each block column of the upper triangle.
+  void analyze(SparseBackend backend, const std::vector<std::vector<std::size_t>>& rows) {
     use_cholmod_ = false;
 #ifdef RANGENAV_HAVE_CHOLMOD
     if constexpr (std::is_same_v<Scalar, double>) {
-      if (backend != SparseBackend::eigen) {
+      if (backend == SparseBackend::cholmod ||
+          (backend == SparseBackend::automatic && supernodal_pays(rows))) {
+        use_cholmod_ = true;
         cholmod_ = std::make_unique<Cholmod>();
         cholmod_->setMode(Eigen::CholmodSupernodalLLt);
         cholmod_->analyzePattern(matrix_);
-        const auto& common = cholmod_->cholmod();
-        use_cholmod_ =
-            backend == SparseBackend::cholmod || common.fl >= common.supernodal_switch * common.lnz;
-        if (use_cholmod_) return;
-        cholmod_.reset();
+        return;
       }
+      cholmod_.reset();
     }
+#else
+    (void)rows;
 #endif
     (void)backend;
     eigen_ = std::make_unique<EigenSolver>();
     eigen_->analyzePattern(matrix_);
   }
+
+#ifdef RANGENAV_HAVE_CHOLMOD
+  // CHOLMOD's test for a supernodal factorisation, flops ≥ supernodal_switch·nnz(L), applied to
+  // the block graph in the stored order: its symbolic analysis (elimination tree and column
+  // counts, no ordering) is B² times smaller than the scalar one, and scalar L has about B²
+  // entries and B³ flops per block entry and block flop.
+  static bool supernodal_pays(const std::vector<std::vector<std::size_t>>& rows) {
+    const auto n = static_cast<Eigen::Index>(rows.size());
+    Eigen::SparseMatrix<double, Eigen::ColMajor, int> blocks(n, n);
+    std::vector<int> sizes(rows.size());
+    for (std::size_t c = 0; c < rows.size(); ++c)
+      sizes[c] = static_cast<int>(rows[c].size());
+    blocks.reserve(sizes);
+    for (std::size_t c = 0; c < rows.size(); ++c)
+      for (const std::size_t r : rows[c])
+        blocks.insert(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = 1.0;
+    blocks.makeCompressed();
+    Cholmod symbolic;
+    symbolic.cholmod().nmethods = 1;
+    symbolic.cholmod().method[0].ordering = CHOLMOD_NATURAL;
+    symbolic.cholmod().postorder = 0;
+    symbolic.setMode(Eigen::CholmodSimplicialLLt);
+    symbolic.analyzePattern(blocks);
+    const auto& common = symbolic.cholmod();
+    return double(B) * common.fl >= common.supernodal_switch * common.lnz;
+  }
+#endif
 
   template <class Rhs, class Out>
   void solve_into(const Rhs& rhs, Out& out) const {
