@@ -237,7 +237,8 @@ struct TranslationOnlySolver {
   static constexpr std::size_t min_pairs = 1;
 
   std::optional<rangenav::Transform<D, double>> solve(
-      std::span<const rangenav::Correspondence<D, double>> pairs) const {
+      std::span<const rangenav::Correspondence<D, double>> pairs,
+      const rangenav::SolveContext<D, double>& /*ctx: ICP's estimate, a prior, threads*/) const {
     if (pairs.size() < min_pairs) return std::nullopt;
     rangenav::Point<D, double> sum = rangenav::Point<D, double>::Zero();
     for (const auto& pair : pairs)
@@ -245,6 +246,24 @@ struct TranslationOnlySolver {
     rangenav::Transform<D, double> t = rangenav::Transform<D, double>::Identity();
     t.translation() = sum / static_cast<double>(pairs.size());
     return t;
+  }
+
+  // The normal equations of sum |T d - m|^2 at t (for IcpResult::information): the translation
+  // rows of the tangent space (rotation rows zero: the solver does not estimate them).
+  rangenav::NormalEquations<D, double> linearize(
+      std::span<const rangenav::Correspondence<D, double>> pairs,
+      const rangenav::Transform<D, double>& t, int /*num_threads*/) const {
+    rangenav::NormalEquations<D, double> eq;
+    for (const auto& pair : pairs) {
+      const rangenav::Point<D, double> r = t.linear().transpose() * (t * pair.data - pair.model);
+      eq.hessian.template topLeftCorner<D, D>().diagonal().array() += 1.0;
+      eq.gradient.template head<D>() += r;
+      eq.cost += r.squaredNorm();
+      eq.weighted_sq += r.squaredNorm();
+      eq.residuals += D;
+      ++eq.pairs;
+    }
+    return eq;
   }
 };
 static_assert(rangenav::TransformSolver<TranslationOnlySolver<2>, 2, double>);

@@ -48,8 +48,7 @@ TEST_CASE("README: register two 3D clouds read from PLY files", "[docs]") {
   // [snippet:register-clouds]
   const auto target = rangenav::io::read_ply<double>(target_path);  // any 3D PointCloud
   const auto source = rangenav::io::read_ply<double>(source_path);
-  rangenav::Icp<3, double, rangenav::MaxDistanceRejector<double>> icp;  // 1 m pairs
-  const auto result = icp.align(rangenav::KdTree<3, double>(target), source);
+  const auto result = rangenav::align(target, source);  // GICP, pairs closer than 1 m
   // result.transform maps source into target; result.reason says why it stopped
   // [snippet-end]
 

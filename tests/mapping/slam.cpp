@@ -217,7 +217,7 @@ TEST_CASE("LoopClosingMapper keeps finite poses through a stretch of all-invalid
 TEST_CASE("LoopClosingMapper closes the ring in 3D with ICP-verified loops", "[mapping][slam]") {
   // The ring driven with drifting planar odometry, seen by a 3D scanner; 6-DOF front end with
   // point-to-plane ICP against the map's normals (the corridors leave their axes to odometry).
-  using PlaneIcp = rangenav::BasicIcp<3, double, rangenav::PointToPlaneSolver<double>,
+  using PlaneIcp = rangenav::BasicIcp<3, double, rangenav::PointToPlaneSolver<3, double>,
                                       rangenav::DecayingDistanceRejector<double>>;
   const auto run = rangenav::test::ring_run();
   const auto world = rangenav::test::ring_corridor();

@@ -11,6 +11,7 @@
 #include "rangenav/io/pcd.hpp"
 #include "rangenav/io/ply.hpp"
 #include "rangenav/registration/frustum.hpp"
+#include "rangenav/registration/gicp_solver.hpp"
 #include "rangenav/registration/icp.hpp"
 #include "rangenav/registration/point_to_line_solver.hpp"
 #include "rangenav/registration/point_to_plane_solver.hpp"
@@ -38,8 +39,18 @@ static_assert(TransformSolver<PointToPointSolver<2, double>, 2, double>);
 static_assert(TransformSolver<PointToPointSolver<3, float>, 3, float>);
 static_assert(TransformSolver<PointToLineSolver<double>, 2, double>);
 static_assert(TransformSolver<PointToLineSolver<float>, 2, float>);
-static_assert(TransformSolver<PointToPlaneSolver<double>, 3, double>);
-static_assert(TransformSolver<PointToPlaneSolver<float>, 3, float>);
+static_assert(TransformSolver<PointToPlaneSolver<3, double>, 3, double>);
+static_assert(TransformSolver<PointToPlaneSolver<3, float>, 3, float>);
+static_assert(TransformSolver<GicpSolver<2, double>, 2, double>);
+static_assert(TransformSolver<GicpSolver<3, float>, 3, float>);
+static_assert(!TransformSolver<PointToPlaneSolver<3, double>, 2, double>);
+static_assert(!TransformSolver<int, 2, double>);
+static_assert(ModelNormalSolver<PointToLineSolver<double>, 2, double>);
+static_assert(ModelNormalSolver<PointToPlaneSolver<3, double>, 3, double>);
+static_assert(!ModelNormalSolver<PointToPointSolver<3, double>, 3, double>);
+static_assert(!ModelNormalSolver<GicpSolver<3, double>, 3, double>);
+static_assert(CovarianceSolver<GicpSolver<2, double>, 2, double>);
+static_assert(!CovarianceSolver<PointToPlaneSolver<3, double>, 3, double>);
 
 namespace {
 
@@ -51,6 +62,12 @@ std::vector<Correspondence<D, double>> exact_pairs(const std::vector<Point<D, do
     pairs.push_back(
         {data[i], t * data[i], 0.0, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i)});
   return pairs;
+}
+
+/// The context of a solver call that starts at t (no prior, one thread).
+template <int D>
+SolveContext<D, double> at(const Transform<D, double>& t) {
+  return {t, nullptr, 1};
 }
 
 std::vector<Eigen::Vector2d> read_csv_2d(const std::filesystem::path& path) {
@@ -114,13 +131,15 @@ TEST_CASE("point-to-line solver: exact on lines, indifferent to sliding along th
   }
   PointToLineSolver<double> solver;
   solver.model_normals = normals;
-  const auto t = solver.solve(pairs);
+  solver.gauss_newton_steps = 10;
+  const Transform2d identity = Transform2d::Identity();
+  const auto t = solver.solve(pairs, at<2>(identity));
   REQUIRE(t);
-  // The pairs without a normal pull point-to-point; those with one fix the pose exactly.
+  // The pairs without a normal are left out; those with one fix the pose exactly.
   std::vector<Correspondence<2, double>> lines;
   for (const auto& c : pairs)
     if (normals[c.model_index].squaredNorm() > 0) lines.push_back(c);
-  const auto exact = solver.solve(lines);
+  const auto exact = solver.solve(lines, at<2>(identity));
   REQUIRE(exact);
   const auto [et, er] = transform_error<2>(*exact, truth);
   CHECK(et < 1e-9);
@@ -128,21 +147,22 @@ TEST_CASE("point-to-line solver: exact on lines, indifferent to sliding along th
   const auto p2p = PointToPointSolver<2, double>{}.solve(lines);
   REQUIRE(p2p);
   CHECK(transform_error<2>(*p2p, truth).first > 1e-3);
+  CHECK(t->isApprox(*exact, 1e-12));
   // With every normal zero (or none given) it is the point-to-point solver.
   PointToLineSolver<double> no_normals;
-  const auto same = no_normals.solve(lines);
+  const auto same = no_normals.solve(lines, at<2>(identity));
   REQUIRE(same);
   CHECK(same->isApprox(*p2p));
   // Too few pairs / identical data points: no transform.
-  CHECK_FALSE(solver.solve(std::span(lines).first(2)).has_value());
+  CHECK_FALSE(solver.solve(std::span(lines).first(2), at<2>(identity)).has_value());
   std::vector<Correspondence<2, double>> identical(5, lines.front());
-  CHECK_FALSE(solver.solve(identical).has_value());
-  // Along a corridor (two parallel walls) the axis is unconstrained: the damping keeps the
-  // point-to-point position there and the answer stays finite.
+  CHECK_FALSE(solver.solve(identical, at<2>(identity)).has_value());
+  // Along a corridor (two parallel walls) the axis is unconstrained: the truncated step keeps
+  // the start's position there and the answer stays finite.
   std::vector<Correspondence<2, double>> corridor;
   for (const auto& c : lines)
     if (std::abs(normals[c.model_index].y()) > 0.5) corridor.push_back(c);
-  const auto along_axis = solver.solve(corridor);
+  const auto along_axis = solver.solve(corridor, at<2>(identity));
   REQUIRE(along_axis);
   CHECK(along_axis->matrix().allFinite());
   CHECK(std::abs(along_axis->translation().y() - truth.translation().y()) < 1e-6);
@@ -260,31 +280,31 @@ TEST_CASE("point-to-plane solver: exact on planes, indifferent to sliding within
   std::vector<Correspondence<3, double>> planar;
   for (const auto& c : pairs)
     if (!normals[c.model_index].isZero(0)) planar.push_back(c);
-  PointToPlaneSolver<double> solver;
+  PointToPlaneSolver<3, double> solver;
   solver.model_normals = normals;
-  const auto from_p2p = solver.solve(planar);
+  solver.gauss_newton_steps = 10;
+  const auto p2p = PointToPointSolver<3, double>{}.solve(planar);
+  REQUIRE(p2p);
+  const auto from_p2p = solver.solve(planar, at<3>(*p2p));
   REQUIRE(from_p2p);
   CHECK(transform_error<3>(*from_p2p, truth).first < 1e-6);
   CHECK(transform_error<3>(*from_p2p, truth).second < 1e-6);
   const Transform3d current = make_transform3(0.1, 0.0, 0.2, 0.0, 0.0, 0.45);
-  const auto from_current = solver.solve(planar, current);
+  const auto from_current = solver.solve(planar, at<3>(current));
   REQUIRE(from_current);
   CHECK(transform_error<3>(*from_current, truth).first < 1e-6);
   CHECK(transform_error<3>(*from_current, truth).second < 1e-6);
-  const auto p2p = PointToPointSolver<3, double>{}.solve(planar);
-  REQUIRE(p2p);
   CHECK(transform_error<3>(*p2p, truth).first > 1e-3);
   // The pairs without a normal are left out: the same answer with them.
-  const auto mixed = solver.solve(pairs, current);
+  const auto mixed = solver.solve(pairs, at<3>(current));
   REQUIRE(mixed);
   CHECK(mixed->isApprox(*from_current, 1e-9));
   // No normals at all: the point-to-point solution; too few pairs: none.
-  PointToPlaneSolver<double> no_normals;
-  const auto same = no_normals.solve(planar, current);
+  PointToPlaneSolver<3, double> no_normals;
+  const auto same = no_normals.solve(planar, at<3>(current));
   REQUIRE(same);
   CHECK(same->isApprox(*p2p));
-  CHECK_FALSE(solver.solve(std::span(planar).first(2)).has_value());
-  CHECK_FALSE(solver.solve(std::span(planar).first(2), current).has_value());
+  CHECK_FALSE(solver.solve(std::span(planar).first(2), at<3>(current)).has_value());
   // Only the floor: x, y and the yaw are unconstrained. From a start off in all six directions,
   // z, roll and pitch come out right and the damping leaves the rest where it was: the floor
   // points' centroid keeps its x and y.
@@ -293,7 +313,7 @@ TEST_CASE("point-to-plane solver: exact on planes, indifferent to sliding within
     if (normals[c.model_index].z() > 0.5 && c.model.z() < 0.01) floor.push_back(c);
   REQUIRE(floor.size() > 50);
   const Transform3d start = make_transform3(0.2, -0.1, 0.05, 0.03, -0.02, 0.1) * truth;
-  const auto on_floor = solver.solve(floor, start);
+  const auto on_floor = solver.solve(floor, at<3>(start));
   REQUIRE(on_floor);
   Eigen::Vector3d before = Eigen::Vector3d::Zero(), after = Eigen::Vector3d::Zero();
   for (const auto& c : floor) {
@@ -314,7 +334,7 @@ TEST_CASE("point-to-plane ICP does not slide along a planar front that fills the
   const Transform3d& truth = front.truth;
   const std::vector<Eigen::Vector3d>& data = front.data;
   const KdTree<3, double> tree(model.points);
-  BasicIcp<3, double, PointToPlaneSolver<double>, DecayingDistanceRejector<double>> icp;
+  BasicIcp<3, double, PointToPlaneSolver<3, double>, DecayingDistanceRejector<double>> icp;
   icp.solver.model_normals = model.normals;
   icp.params.max_iterations = 50;
   icp.rejector<DecayingDistanceRejector<double>>() = {0.3, 0.05, 0.7};
@@ -686,7 +706,7 @@ TEST_CASE("coarse-to-fine ICP: a data subset first, then all points, to the same
   const std::vector<Eigen::Vector3d>& data = front.data;
   const KdTree<3, double> tree(model.points);
   using PlaneIcp =
-      BasicIcp<3, double, PointToPlaneSolver<double>, DecayingDistanceRejector<double>>;
+      BasicIcp<3, double, PointToPlaneSolver<3, double>, DecayingDistanceRejector<double>>;
   const std::size_t n = data.size();
   const auto make = [&](std::size_t stride, bool reuse) {
     PlaneIcp icp;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <concepts>
+#include <type_traits>
 
 #include "rangenav/core/angles.hpp"
 
@@ -122,10 +123,18 @@ template <std::floating_point Scalar>
   return std::acos(std::clamp(c, Scalar(-1), Scalar(1)));
 }
 
+/// The tolerance of is_rigid for a transform an API receives: what composing and inverting a few
+/// rigid transforms leaves of orthonormality in Scalar's precision (1e-6 in double, 1e-3 in
+/// float).
+template <class Scalar>
+inline constexpr Scalar rigid_tolerance = std::is_same_v<Scalar, float> ? Scalar(1e-3)
+                                                                        : Scalar(1e-6);
+
 /// True when every coefficient is finite and the linear part is a rotation (orthonormal,
 /// determinant +1) within `tolerance`.
 template <int D, class Scalar>
-[[nodiscard]] bool is_rigid(const Transform<D, Scalar>& t, Scalar tolerance = Scalar(1e-6)) {
+[[nodiscard]] bool is_rigid(const Transform<D, Scalar>& t,
+                            Scalar tolerance = rigid_tolerance<Scalar>) {
   if (!t.matrix().allFinite()) return false;
   const auto& r = t.linear();
   const auto should_be_identity = (r.transpose() * r).eval();

@@ -26,7 +26,6 @@
 // direction of the plane's last line, planes reported from min_scans scans on), centroids and
 // lines labelled floor by majority, and every default value.
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <concepts>
@@ -43,6 +42,7 @@
 #include "rangenav/core/types.hpp"
 #include "rangenav/egocentric/floor.hpp"
 #include "rangenav/egocentric/pitching_stream.hpp"
+#include "rangenav/geometry/pca.hpp"
 
 namespace rangenav {
 
@@ -160,21 +160,12 @@ template <int D, std::floating_point Scalar>
 [[nodiscard]] LineSegment<D, Scalar> fit_line_segment(std::span<const Point<D, Scalar>> points,
                                                       std::size_t first, std::size_t count) {
   using Vec = Point<D, Scalar>;
-  using Mat = Eigen::Matrix<Scalar, D, D>;
   LineSegment<D, Scalar> s;
   s.first = first;
   s.count = count;
-  Vec c = Vec::Zero();
-  for (std::size_t k = first; k < first + count; ++k)
-    c += points[k];
-  c /= static_cast<Scalar>(count);
-  Mat scatter = Mat::Zero();
-  for (std::size_t k = first; k < first + count; ++k) {
-    const Vec d = points[k] - c;
-    scatter.noalias() += d * d.transpose();
-  }
-  const Eigen::SelfAdjointEigenSolver<Mat> eig(scatter);
-  Vec dir = eig.eigenvectors().col(D - 1);  // the largest eigenvalue comes last
+  const PcaFit<D, Scalar> fit = fit_pca<D, Scalar>(points.subspan(first, count));
+  const Vec& c = fit.mean;
+  Vec dir = fit.principal_direction();
   const Vec& p0 = points[first];
   const Vec& p1 = points[first + count - 1];
   if (dir.dot(p1 - p0) < Scalar(0)) dir = -dir;
@@ -182,8 +173,7 @@ template <int D, std::floating_point Scalar>
   s.direction = dir;
   s.a = c + dir * dir.dot(p0 - c);
   s.b = c + dir * dir.dot(p1 - c);
-  const Scalar residual = std::max(Scalar(0), scatter.trace() - eig.eigenvalues()(D - 1));
-  s.rms = std::sqrt(residual / static_cast<Scalar>(count));
+  s.rms = std::sqrt(std::max(Scalar(0), fit.covariance.trace() - fit.eigenvalues(D - 1)));
   return s;
 }
 
@@ -540,14 +530,14 @@ class SweepReducer {
 
     void refit() {
       const Vec3 c = sum / weight;
-      const Eigen::Matrix<Scalar, 3, 3> cov = outer / weight - c * c.transpose();
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, 3, 3>> eig(cov);
-      Vec3 n = eig.eigenvectors().col(0);  // the smallest eigenvalue comes first
-      if (n.dot(c) < Scalar(0)) n = -n;    // distance >= 0: the normal points away from P_b
+      const PcaFit<3, Scalar> fit = pca_of_covariance<3, Scalar>(
+          c, outer / weight - c * c.transpose(), plane.point_count);
+      Vec3 n = fit.normal();
+      if (n.dot(c) < Scalar(0)) n = -n;  // distance >= 0: the normal points away from P_b
       plane.normal = n;
       plane.centroid = c;
       plane.distance = n.dot(c);
-      plane.rms = std::sqrt(std::max(Scalar(0), eig.eigenvalues()(0)));
+      plane.rms = fit.normal_rms();
     }
   };
 

@@ -30,7 +30,6 @@
 //
 // Randomness comes from the caller's engine: with the same engine state the result is identical.
 
-#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <array>
@@ -49,6 +48,7 @@
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/geometry/concave_hull.hpp"
+#include "rangenav/geometry/pca.hpp"
 #include "rangenav/geometry/planar_polygon.hpp"
 
 namespace rangenav {
@@ -398,8 +398,7 @@ class PlaneExtractor {
     const Point3d centroid = m.p0 + mean;
     Eigen::Matrix3d cov = m.scatter();  // covariance times count, after the next line
     cov.noalias() -= double(m.count) * mean * mean.transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-    Point3d normal = eig.eigenvectors().col(0);
+    Point3d normal = pca_of_covariance<3, double>(centroid, cov * inv, m.count).normal();
     if (!normal.allFinite() || normal.norm() < 0.5) return std::nullopt;
     if (normal.dot(side.normal) < 0) normal = -normal;
     return Plane3<double>::through(centroid, normal);

@@ -1,7 +1,9 @@
 #pragma once
 // Voxel-grid downsampling (paper 004 §3.2: every key frame is downsampled with a voxel filter
 // before it is aligned): the finite points falling into one cubic voxel of edge `leaf_size` are
-// replaced by their centroid. Deterministic output ordered by voxel key.
+// replaced by their centroid. Deterministic output ordered by voxel key; the points of a voxel
+// are summed in input order, serially or on several threads alike, so the thread count does not
+// change a bit of the output.
 
 #include <algorithm>
 #include <array>
@@ -14,23 +16,23 @@
 #include <vector>
 
 #include "rangenav/core/error.hpp"
+#include "rangenav/core/parallel.hpp"
 #include "rangenav/core/point_cloud.hpp"
 #include "rangenav/core/types.hpp"
 
 namespace rangenav {
 
-/// Replaces the points of every voxel by their centroid. Non-finite points are skipped; the
-/// voxel coordinates must fit in 21 bits per axis (|coordinate| < 2^20 * leaf_size), points
-/// beyond that are skipped too. Throws invalid_argument unless leaf_size is finite and > 0.
+namespace detail {
+
+/// The serial voxel filter (see voxel_downsample).
 template <PointCloud C>
-[[nodiscard]] std::vector<cloud_point_t<C>> voxel_downsample(const C& cloud,
-                                                             traits::scalar_t<C> leaf_size) {
+[[nodiscard]] std::vector<cloud_point_t<C>> voxel_downsample_serial(const C& cloud,
+                                                                    traits::scalar_t<C> leaf_size) {
   using Scalar = traits::scalar_t<C>;
   constexpr int D = traits::dimension_v<C>;
   using Point = cloud_point_t<C>;
   constexpr std::size_t Dim = D;
   using Coords = std::array<Scalar, Dim>;  // (std::array: registers, where Eigen's spill)
-  detail::require_positive("voxel_downsample", "leaf_size", leaf_size);
   const std::size_t n = traits::size(cloud);
   constexpr std::int64_t half = std::int64_t(1) << 20;
   const Scalar inv = Scalar(1) / leaf_size;
@@ -174,6 +176,110 @@ template <PointCloud C>
     out.push_back(sum / static_cast<Scalar>(voxels[slot].count));
   }
   return out;
+}
+
+/// The voxel filter on several threads, with the serial filter's output: the key of every point
+/// (in parallel), the points bucketed by key hash in input order, each bucket's voxels summed in
+/// input order (in parallel), the voxels sorted by key.
+template <PointCloud C>
+[[nodiscard]] std::vector<cloud_point_t<C>> voxel_downsample_parallel(const C& cloud,
+                                                                      traits::scalar_t<C> leaf_size,
+                                                                      int num_threads) {
+  using Scalar = traits::scalar_t<C>;
+  constexpr int D = traits::dimension_v<C>;
+  using Point = cloud_point_t<C>;
+  const std::size_t n = traits::size(cloud);
+  constexpr std::int64_t half = std::int64_t(1) << 20;
+  constexpr std::uint64_t outside = std::numeric_limits<std::uint64_t>::max();
+  const Scalar inv = Scalar(1) / leaf_size;
+  const Scalar lowest = Scalar(1 - half), highest = Scalar(half - 1);
+  // The cell key of every point, as the serial filter computes it (outside: skipped).
+  std::vector<std::uint64_t> keys(n);
+  constexpr std::size_t block = 4096;
+  for_each_block(n, block, num_threads, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto& p = traits::point(cloud, i);
+      std::uint64_t key = 0;
+      bool inside = true;
+      for (int d = 0; d < D; ++d) {
+        const Scalar t = static_cast<Scalar>(p[d]) * inv;
+        inside = inside && t >= lowest && t < highest;
+        auto c = static_cast<std::int64_t>(inside ? t : Scalar(0));
+        c -= static_cast<std::int64_t>(t < static_cast<Scalar>(c));
+        key = (key << 21) | static_cast<std::uint64_t>(c + half);
+      }
+      keys[i] = inside ? key : outside;
+    }
+  });
+  // Buckets by key hash, points in input order inside each (a stable counting sort).
+  const std::size_t buckets = 16 * static_cast<std::size_t>(num_threads);
+  const auto bucket_of = [buckets](std::uint64_t key) {
+    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 32) % buckets;
+  };
+  std::vector<std::size_t> start(buckets + 1, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    if (keys[i] != outside) ++start[bucket_of(keys[i]) + 1];
+  for (std::size_t b = 0; b < buckets; ++b)
+    start[b + 1] += start[b];
+  std::vector<std::uint32_t> order(start[buckets]);
+  {
+    std::vector<std::size_t> next(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i)
+      if (keys[i] != outside) order[next[bucket_of(keys[i])]++] = static_cast<std::uint32_t>(i);
+  }
+  // Each bucket's voxels: (key, sum, count), the sum in input order.
+  struct Voxel {
+    std::uint64_t key;
+    std::array<Scalar, static_cast<std::size_t>(D)> sum;
+    std::size_t count;
+  };
+  std::vector<std::vector<Voxel>> voxels(buckets);
+  for_each_block(buckets, 1, num_threads, [&](std::size_t b, std::size_t, std::size_t, int) {
+    std::unordered_map<std::uint64_t, std::uint32_t> slot_of;
+    std::vector<Voxel>& out = voxels[b];
+    for (std::size_t k = start[b]; k < start[b + 1]; ++k) {
+      const std::uint32_t i = order[k];
+      const auto [it, fresh] = slot_of.try_emplace(keys[i], static_cast<std::uint32_t>(out.size()));
+      if (fresh) out.push_back({keys[i], {}, 0});
+      Voxel& v = out[it->second];
+      const auto& p = traits::point(cloud, i);
+      for (int d = 0; d < D; ++d)
+        v.sum[static_cast<std::size_t>(d)] += static_cast<Scalar>(p[d]);
+      ++v.count;
+    }
+  });
+  std::vector<std::pair<std::uint64_t, Point>> centroids;
+  for (const auto& bucket : voxels)
+    for (const Voxel& v : bucket) {
+      Point sum;
+      for (int d = 0; d < D; ++d)
+        sum[d] = v.sum[static_cast<std::size_t>(d)];
+      centroids.emplace_back(v.key, sum / static_cast<Scalar>(v.count));
+    }
+  std::sort(centroids.begin(), centroids.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<Point> out;
+  out.reserve(centroids.size());
+  for (const auto& c : centroids)
+    out.push_back(c.second);
+  return out;
+}
+
+}  // namespace detail
+
+/// Replaces the points of every voxel by their centroid. Non-finite points are skipped; the
+/// voxel coordinates must fit in 21 bits per axis (|coordinate| < 2^20 * leaf_size), points
+/// beyond that are skipped too. With num_threads > 1 the work runs on that many threads (same
+/// output). Throws invalid_argument unless leaf_size is finite and > 0 and num_threads >= 1.
+template <PointCloud C>
+[[nodiscard]] std::vector<cloud_point_t<C>> voxel_downsample(const C& cloud,
+                                                             traits::scalar_t<C> leaf_size,
+                                                             int num_threads = 1) {
+  detail::require_positive("voxel_downsample", "leaf_size", leaf_size);
+  detail::require_threads("voxel_downsample", num_threads);
+  if (num_threads > 1 && parallel_enabled)
+    return detail::voxel_downsample_parallel(cloud, leaf_size, num_threads);
+  return detail::voxel_downsample_serial(cloud, leaf_size);
 }
 
 }  // namespace rangenav

@@ -175,7 +175,7 @@ class GeometricMapper {
   using Rejector = FrustumRejector<3, double>;
   /// Point-to-plane ICP against the point map's normals (see the file comment).
   using IcpType =
-      BasicIcp<3, double, PointToPlaneSolver<double>, DecayingDistanceRejector<double>, Rejector>;
+      BasicIcp<3, double, PointToPlaneSolver<3, double>, DecayingDistanceRejector<double>, Rejector>;
 
   /// A mapper with these parameters; throws invalid_argument for invalid ones.
   explicit GeometricMapper(const GeometricMapperParams& params = {})

@@ -29,6 +29,8 @@
 #include <numbers>
 #include <optional>
 #include <string_view>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "rangenav/core/error.hpp"
@@ -155,7 +157,8 @@ class IncrementalMapper {
   /// The scan-to-scan ICP of match_previous_scan.
   using previous_scan_icp_type = Icp<D, Scalar, DecayingDistanceRejector<Scalar>>;
   /// Whether IcpType's solver uses model normals (then the map keeps them).
-  static constexpr bool uses_normals = requires(IcpType & i) { i.solver.model_normals; };
+  static constexpr bool uses_normals =
+      ModelNormalSolver<std::remove_cvref_t<decltype(std::declval<IcpType&>().solver)>, D, Scalar>;
 
   /// The settings; validated by the constructor (later changes are not re-checked).
   IncrementalMapperParams<Scalar> params;
@@ -182,7 +185,7 @@ class IncrementalMapper {
   MapperUpdate<D, Scalar> process(const C& scan,
                                   const std::optional<transform_type>& odometry = std::nullopt) {
     constexpr std::string_view where = "IncrementalMapper::process";
-    if (odometry && !is_rigid(*odometry, Scalar(std::is_same_v<Scalar, float> ? 1e-3 : 1e-6)))
+    if (odometry && !is_rigid(*odometry, rigid_tolerance<Scalar>))
       detail::throw_invalid(where, "argument 'odometry' is not a finite rigid transform");
     MapperUpdate<D, Scalar> update;
     transform_type guess = pose_;

@@ -23,7 +23,6 @@
 // about 30 B per point in 2D; memory_bytes() reports that exact figure. With normals, a point
 // also holds its normal and 4 (normal_neighbors + 2) B of neighbour bookkeeping (not counted).
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <concepts>
@@ -39,6 +38,7 @@
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/point_cloud.hpp"
 #include "rangenav/core/types.hpp"
+#include "rangenav/geometry/pca.hpp"
 #include "rangenav/search/grid_index.hpp"
 #include "rangenav/search/kd_tree.hpp"
 
@@ -118,7 +118,7 @@ class SparsePointMap {
   template <PointCloudOf<D> C>
   SparseInsertStats insert(const C& cloud, const transform_type& pose,
                            std::span<const std::uint32_t> near_hint) {
-    if (!is_rigid(pose, Scalar(std::is_same_v<Scalar, float> ? 1e-3 : 1e-6)))
+    if (!is_rigid(pose, rigid_tolerance<Scalar>))
       detail::throw_invalid("SparsePointMap::insert",
                             "argument 'pose' is not a finite rigid transform");
     const Scalar eps_sq = params_.epsilon_d * params_.epsilon_d;
@@ -269,21 +269,12 @@ class SparsePointMap {
     for (std::size_t m = 0; m < k; ++m)
       neighbor_index_[i * params_.normal_neighbors + m] = neighbors_[m].index;
     if (k < static_cast<std::size_t>(D)) return point_type::Zero();
-    point_type mean = point_type::Zero();
-    for (const auto& nb : neighbors_)
-      mean += tree_.point(nb.index);
-    mean /= static_cast<Scalar>(k);
-    Eigen::Matrix<Scalar, D, D> cov = Eigen::Matrix<Scalar, D, D>::Zero();
-    for (const auto& nb : neighbors_) {
-      const point_type d = tree_.point(nb.index) - mean;
-      cov.noalias() += d * d.transpose();
-    }
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, D, D>> eig;
-    eig.computeDirect(cov);
-    const auto& values = eig.eigenvalues();
+    const PcaFit<D, Scalar> fit = fit_pca<D, Scalar>(
+        k, [&](std::size_t m) -> const point_type& { return tree_.point(neighbors_[m].index); });
+    const auto& values = fit.eigenvalues;
     if (!(values(D - 1) > Scalar(0)) || values(0) > params_.max_flatness * values(D - 1))
       return point_type::Zero();
-    const point_type n = eig.eigenvectors().col(0).normalized();
+    const point_type n = fit.normal().normalized();
     return n.allFinite() ? n : point_type::Zero();
   }
 

@@ -50,7 +50,6 @@
 // per-scan work allocates nothing once the buffers have grown).
 
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
 #include <array>
@@ -69,6 +68,7 @@
 #include "rangenav/core/angles.hpp"
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
+#include "rangenav/geometry/pca.hpp"
 #include "rangenav/scan/laser_scan.hpp"
 
 namespace rangenav {
@@ -291,21 +291,9 @@ struct HayaiLine {
 template <class Scalar>
 HayaiLine<Scalar> fit_hayai_line(std::span<const Point<2, Scalar>> points, std::size_t first,
                                  std::size_t count) {
-  Point<2, Scalar> c = Point<2, Scalar>::Zero();
-  for (std::size_t k = first; k < first + count; ++k)
-    c += points[k];
-  c /= static_cast<Scalar>(count);
-  Eigen::Matrix<Scalar, 2, 2> cov = Eigen::Matrix<Scalar, 2, 2>::Zero();
-  for (std::size_t k = first; k < first + count; ++k) {
-    const Point<2, Scalar> q = points[k] - c;
-    cov.noalias() += q * q.transpose();
-  }
-  cov /= static_cast<Scalar>(count);
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, 2, 2>> eig;
-  eig.computeDirect(cov);  // eigenvalues increasing: the largest spans the line
-  const Scalar residual_sq = std::max(eig.eigenvalues()(0), Scalar(0));
-  return {c, eig.eigenvectors().col(1), std::sqrt(residual_sq),
-          std::sqrt(std::max(eig.eigenvalues()(1), Scalar(0)))};
+  const PcaFit<2, Scalar> fit = fit_pca<2, Scalar>(points.subspan(first, count));
+  return {fit.mean, fit.principal_direction(), fit.normal_rms(),
+          std::sqrt(std::max(fit.eigenvalues(1), Scalar(0)))};
 }
 
 }  // namespace detail

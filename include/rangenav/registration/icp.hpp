@@ -5,15 +5,25 @@
 //                          bounded by the tightest `max_distance_sq` any rejector exposes and
 //                          skipping data points a rejector does not `admit` (frustum culling);
 //   rejection              each rejector of the compile-time list, in order;
-//   solver                 closed-form minimiser of Eq. (1) of paper 000 over the kept pairs;
+//   solver                 the TransformSolver policy (transform_solver.hpp): closed-form
+//                          point-to-point, point-to-plane or Generalized-ICP, with an optional
+//                          robust kernel and an optional Gaussian prior on the transform;
 //   convergence check      change of the transform below the epsilons and every rejector settled.
 // Policies are public typed members with defaults (as in small_gicp's Registration):
 //   Icp<2, double, DecayingDistanceRejector<double>, UniqueModelPointRejector> icp;
 //   icp.params.max_iterations = 30;
 //   icp.rejector<DecayingDistanceRejector<double>>().final_distance = 0.05;
 //   const auto result = icp.align(KdTree<2, double>(model_scan), data_scan, initial_guess);
-// The result says why it stopped and carries a degeneracy signal: the smallest eigenvalue of the
-// point-to-plane normal equations at the solution, so a featureless corridor is reported.
+// The result says why it stopped, carries the information matrix of the solver's objective at the
+// solution (its inverse estimates the covariance of the transform, in the tangent space of
+// transform_solver.hpp) and a degeneracy signal: the smallest eigenvalue of the point-to-plane
+// normal equations at the solution, so a featureless corridor is reported.
+//
+// Threads: IcpParams::num_threads (default 1) runs the correspondence search, the solver's
+// reduction and the degeneracy check on that many threads (OpenMP); the reductions are blocked
+// independently of the thread count, so 1 and N threads give the same transform bit for bit.
+// Rejectors' const members (max_distance_sq, admits) and the search's queries are then called
+// from several threads at once.
 //
 // An Icp object owns scratch buffers reused across calls: align() allocates nothing once they
 // have grown. One object per thread.
@@ -33,11 +43,16 @@
 #include <vector>
 
 #include "rangenav/core/error.hpp"
+#include "rangenav/core/parallel.hpp"
 #include "rangenav/core/point_cloud.hpp"
 #include "rangenav/core/types.hpp"
+#include "rangenav/geometry/pca.hpp"
 #include "rangenav/registration/correspondence.hpp"
+#include "rangenav/registration/gauss_newton.hpp"
+#include "rangenav/registration/point_to_plane_solver.hpp"
 #include "rangenav/registration/point_to_point_solver.hpp"
 #include "rangenav/registration/rejectors.hpp"
+#include "rangenav/registration/transform_solver.hpp"
 #include "rangenav/search/nearest_neighbor_search.hpp"
 
 namespace rangenav {
@@ -51,6 +66,7 @@ enum class IcpTermination {
                    ///< the normal equations are near-singular (e.g. a featureless corridor)
 };
 
+/// The reason's name as spelled in the enum.
 [[nodiscard]] constexpr std::string_view to_string(IcpTermination reason) {
   switch (reason) {
     case IcpTermination::converged:
@@ -68,14 +84,14 @@ enum class IcpTermination {
 /// ICP parameters that are not a policy's.
 template <std::floating_point Scalar = double>
 struct IcpParams {
-  int max_iterations = 50;
+  int max_iterations = 50;  ///< iterations at most (each with a correspondence search)
   Scalar translation_epsilon = Scalar(1e-4);  ///< m: converged when the update moves less ...
   Scalar rotation_epsilon = Scalar(1e-4);     ///< rad: ... and turns less than this
   std::size_t min_pairs = 0;                  ///< at least the solver's minimum; 0 = that minimum
   /// Evaluate the normal equations at the solution (costs one k-NN query per pair, once).
   bool check_degeneracy = true;
   /// A smallest normalised eigenvalue below this reports IcpTermination::degenerate. The
-  /// eigenvalues are per pair and unit-free (rotations scaled by the data's RMS radius): about
+  /// eigenvalues are per pair and unit-free (rotations scaled by the data's RMS lever arm): about
   /// 1/D for a well-constrained scene, ~0 along a corridor.
   Scalar degeneracy_threshold = Scalar(0.01);
   /// Neighbours for the model normals of the degeneracy check; 0 = 5 in 2D, 10 in 3D.
@@ -95,7 +111,17 @@ struct IcpParams {
   /// iteration always uses all points, so matched_count, fitness and the final pairs are the
   /// full set's. 0, or data with fewer than 2 coarse_points points, = all points throughout.
   std::size_t coarse_points = 0;
+  /// Threads for the correspondence search and the reductions (see the file comment).
+  int num_threads = 1;
+  /// Evaluate the information matrix of the solver's objective at the solution (one more pass
+  /// of the solver's linearisation over the final pairs).
+  bool compute_information = true;
+  /// Directions the information matrix constrains less than this fraction of its strongest
+  /// (rotations scaled by the data's RMS lever arm) are reported with zero information: the
+  /// solvers treat them as unobserved too (transform_solver.hpp, default_degeneracy_ratio).
+  Scalar degeneracy_ratio = static_cast<Scalar>(default_degeneracy_ratio);
 
+  /// Throws invalid_argument for a value out of range.
   void validate() const {
     constexpr std::string_view where = "IcpParams";
     if (max_iterations < 1)
@@ -103,19 +129,23 @@ struct IcpParams {
     detail::require_non_negative(where, "translation_epsilon", translation_epsilon);
     detail::require_non_negative(where, "rotation_epsilon", rotation_epsilon);
     detail::require_non_negative(where, "degeneracy_threshold", degeneracy_threshold);
+    if (!(degeneracy_ratio >= Scalar(0) && degeneracy_ratio < Scalar(1)))
+      detail::throw_invalid_argument(where, "degeneracy_ratio", degeneracy_ratio,
+                                     "must be in [0, 1)");
     if (reuse_neighbors && reuse_candidates < 2)
       detail::throw_invalid_argument(where, "reuse_candidates", reuse_candidates, "must be >= 2");
+    detail::require_threads(where, num_threads);
   }
 };
 
 /// The outcome of one alignment. Every number is finite.
 template <int D, class Scalar = double>
 struct IcpResult {
-  static constexpr int dof = D == 2 ? 3 : 6;
+  static constexpr int dof = pose_dof<D>;  ///< degrees of freedom of the transform
 
   Transform<D, Scalar> transform = Transform<D, Scalar>::Identity();  ///< data -> model frame
-  bool converged = false;
-  IcpTermination reason = IcpTermination::max_iterations;
+  bool converged = false;                                  ///< reason == IcpTermination::converged
+  IcpTermination reason = IcpTermination::max_iterations;  ///< why it stopped
   int iterations = 0;  ///< iterations run (each with a correspondence search)
   /// Of them, those on the IcpParams::coarse_points subset of the data (the first ones).
   int coarse_iterations = 0;
@@ -138,6 +168,17 @@ struct IcpResult {
   /// The least constrained motion (tx, ty[, tz], rotation...) when evaluated: along a corridor
   /// it points along the corridor's axis.
   std::optional<Eigen::Matrix<Scalar, dof, 1>> weakest_direction;
+  /// The information matrix of the scan match at the solution (IcpParams::compute_information):
+  /// the Hessian of the solver's objective over the final pairs divided by the residual
+  /// variance, in the tangent space of transform_solver.hpp (T_true = transform [+] d, d =
+  /// (translation, rotation) in the data frame: g2o's edge convention). Its inverse estimates
+  /// the covariance of the transform from the noise of the points (Censi 2007: not the errors
+  /// of wrong pairs nor of a wrong local minimum). A pose prior given to align() is not
+  /// included, so a pose graph may hold both as separate edges. Along a direction the geometry
+  /// leaves free (a corridor's axis) it is ~0.
+  std::optional<PoseMatrix<D, Scalar>> information;
+  /// The residual variance that scaled it (m^2 per scalar residual).
+  std::optional<Scalar> residual_variance;
 };
 
 /// ICP with a solver policy and a compile-time list of rejectors (see the file comment).
@@ -149,18 +190,21 @@ class BasicIcp {
                 "Icp: every rejector must model CorrespondenceRejector");
 
  public:
-  static constexpr int dimension = D;
-  using scalar_type = Scalar;
-  using point_type = Point<D, Scalar>;
-  using transform_type = Transform<D, Scalar>;
-  using result_type = IcpResult<D, Scalar>;
-  using correspondence_type = Correspondence<D, Scalar>;
+  static constexpr int dimension = D;                     ///< 2 or 3
+  using scalar_type = Scalar;                             ///< float or double
+  using point_type = Point<D, Scalar>;                    ///< a point of either cloud
+  using transform_type = Transform<D, Scalar>;            ///< data -> model frame
+  using result_type = IcpResult<D, Scalar>;               ///< what align() returns
+  using correspondence_type = Correspondence<D, Scalar>;  ///< a data-model pair
+  using solver_type = Solver;                             ///< the TransformSolver policy
 
-  IcpParams<Scalar> params{};
-  Solver solver{};
-  std::tuple<Rejectors...> rejectors{};
+  IcpParams<Scalar> params{};            ///< iterations, convergence, threads, degeneracy check
+  Solver solver{};                       ///< public typed policy: configure it directly
+  std::tuple<Rejectors...> rejectors{};  ///< applied in order every iteration
 
+  /// Default parameters, solver and rejectors.
   BasicIcp() = default;
+  /// These parameters and rejectors, a default solver.
   explicit BasicIcp(const IcpParams<Scalar>& p, Rejectors... r)
       : params(p), rejectors(std::move(r)...) {}
 
@@ -169,6 +213,7 @@ class BasicIcp {
   [[nodiscard]] R& rejector() {
     return std::get<R>(rejectors);
   }
+  /// The rejector of type R in the list (const).
   template <class R>
   [[nodiscard]] const R& rejector() const {
     return std::get<R>(rejectors);
@@ -182,6 +227,28 @@ class BasicIcp {
   requires(Model::dimension == D && std::same_as<typename Model::scalar_type, Scalar>) result_type
       align(const Model& model, const Data& data,
             const transform_type& initial_guess = transform_type::Identity()) {
+    return align_impl(model, data, initial_guess, nullptr);
+  }
+
+  /// As above, with a Gaussian prior on the transform that the solver adds to its normal
+  /// equations every iteration (transform_solver.hpp): where the geometry leaves a direction
+  /// free (a corridor's axis), the result follows the prior instead of sliding. Throws
+  /// invalid_argument for an invalid prior as well.
+  template <NearestNeighborSearch Model, PointCloudOf<D> Data>
+  requires(Model::dimension == D && std::same_as<typename Model::scalar_type, Scalar>) result_type
+      align(const Model& model, const Data& data, const transform_type& initial_guess,
+            const PosePrior<D, Scalar>& prior) {
+    prior.validate("Icp::align");
+    return align_impl(model, data, initial_guess, &prior);
+  }
+
+  /// The pairs kept in the last iteration of the last alignment.
+  [[nodiscard]] std::span<const correspondence_type> correspondences() const { return pairs_; }
+
+ private:
+  template <class Model, class Data>
+  result_type align_impl(const Model& model, const Data& data, const transform_type& initial_guess,
+                         const PosePrior<D, Scalar>* prior) {
     constexpr std::string_view where = "Icp::align";
     params.validate();
     std::apply([](auto&... r) { (validate_rejector(r), ...); }, rejectors);
@@ -190,7 +257,7 @@ class BasicIcp {
       detail::throw_invalid(where, "argument 'data' is empty (0 points)");
     if (!initial_guess.matrix().allFinite())
       detail::throw_invalid(where, "argument 'initial_guess' is not finite");
-    if (!is_rigid(initial_guess, Scalar(std::is_same_v<Scalar, float> ? 1e-3 : 1e-6)))
+    if (!is_rigid(initial_guess, rigid_tolerance<Scalar>))
       detail::throw_invalid(where, "argument 'initial_guess' is not a rigid transform");
 
     data_.clear();
@@ -203,20 +270,16 @@ class BasicIcp {
         data_index_.push_back(static_cast<std::uint32_t>(i));
       }
     }
-    return run(model, initial_guess);
+    return run(model, initial_guess, prior);
   }
 
-  /// The pairs kept in the last iteration of the last alignment.
-  [[nodiscard]] std::span<const correspondence_type> correspondences() const { return pairs_; }
-
- private:
   template <class R>
   static void validate_rejector(const R& r) {
     if constexpr (requires { r.validate(); }) r.validate();
   }
 
   template <class Model>
-  result_type run(const Model& model, transform_type transform) {
+  result_type run(const Model& model, transform_type transform, const PosePrior<D, Scalar>* prior) {
     result_type result;
     result.data_count = data_.size();
     const std::size_t min_pairs = std::max<std::size_t>(params.min_pairs, Solver::min_pairs);
@@ -245,13 +308,9 @@ class BasicIcp {
         break;
       }
       if (coarse_now) ++result.coarse_iterations;
-      // A solver that refines from the current transform (PointToPlaneSolver) gets it.
-      const std::span<const correspondence_type> kept(pairs_);
-      std::optional<transform_type> next;
-      if constexpr (requires { solver.solve(kept, transform); })
-        next = solver.solve(kept, transform);
-      else
-        next = solver.solve(kept);
+      const std::optional<transform_type> next =
+          solver.solve(std::span<const correspondence_type>(pairs_),
+                       SolveContext<D, Scalar>{transform, prior, params.num_threads});
       if (!next) {
         result.reason = IcpTermination::degenerate;
         break;
@@ -286,20 +345,21 @@ class BasicIcp {
     result.fitness = data_.empty() ? Scalar(0)
                                    : static_cast<Scalar>(result.matched_count) /
                                          static_cast<Scalar>(data_.size());
-    if (params.check_degeneracy && result.reason != IcpTermination::too_few_pairs &&
-        result.reason != IcpTermination::degenerate)
-      evaluate_degeneracy(model, transform, result);
+    const bool solved = result.reason != IcpTermination::too_few_pairs &&
+                        result.reason != IcpTermination::degenerate;
+    if (params.compute_information && solved) evaluate_information(transform, result);
+    if (params.check_degeneracy && solved) evaluate_degeneracy(model, transform, result);
     return result;
   }
 
-  // The pairs of one iteration, of every `stride`-th data point; returns the number of model
-  // searches run.
+  // The pairs of one iteration, of every `stride`-th data point, in data order; returns the
+  // number of model searches run. Blocks of data points run on up to num_threads threads, each
+  // writing the pair of data point j into slot j; the pairs are then gathered in order.
   template <class Model>
   std::size_t match(const Model& model, const IcpContext<D, Scalar>& ctx, std::size_t stride) {
     Scalar bound_sq = unbounded_sq<Scalar>;
     std::apply([&](const auto&... r) { ((bound_sq = std::min(bound_sq, bound_of(r, ctx))), ...); },
                rejectors);
-    pairs_.clear();
     const detail::AffineApply<D, Scalar> t(ctx.transform);
     const bool reuse = params.reuse_neighbors && std::isfinite(bound_sq);
     const std::size_t candidates = params.reuse_candidates;
@@ -308,130 +368,183 @@ class BasicIcp {
       candidates_.resize(data_.size() * candidates);
     }
     const Scalar bound = std::sqrt(bound_sq);
-    std::size_t searches = 0;
-    for (std::size_t j = 0; j < data_.size(); j += stride) {
-      const point_type p = t(data_[j]);
-      bool admitted = true;
-      std::apply([&](const auto&... r) { ((admitted = admitted && admits(r, ctx, p)), ...); },
-                 rejectors);
-      if (!admitted) continue;
-      if (!reuse) {
-        ++searches;
-        if (const auto nb = model.nearest(p, bound_sq))
-          pairs_.push_back(
-              {data_[j], model.point(nb->index), nb->distance_sq, data_index_[j], nb->index});
-        continue;
-      }
-      // Reuse of the last search of this data point, made at `query`, which found the
-      // candidates (its k nearest model points within the bound) and proved every other model
-      // point at least `others` away. The point has since moved by delta, so every other model
-      // point is now at least others - delta away (triangle inequality): if the closest
-      // candidate is nearer than that, it is the nearest model point; if there was none and
-      // others - delta reaches the bound, there is none.
-      NeighborCache& c = cache_[j];
-      if (c.count != no_cache) {
-        const Scalar delta = (p - c.query).norm();
-        const Scalar margin = Scalar(64) * std::numeric_limits<Scalar>::epsilon() *
-                              (Scalar(1) + p.template lpNorm<Eigen::Infinity>() + c.others);
-        const Scalar reach = c.others - delta - margin;
-        if (c.count == 0) {
-          if (reach >= bound) continue;
-        } else {
-          std::uint32_t best = 0;
-          Scalar best_sq = std::numeric_limits<Scalar>::infinity();
-          for (std::uint32_t k = 0; k < c.count; ++k) {
-            const std::uint32_t index = candidates_[j * candidates + k];
-            const point_type& m = model.point(index);
-            Scalar d_sq = 0;  // summed per axis in order, as the kd-tree's metric does
-            for (int d = 0; d < D; ++d)
-              d_sq += (p[d] - m[d]) * (p[d] - m[d]);
-            if (d_sq < best_sq) {
-              best_sq = d_sq;
-              best = index;
+    const std::size_t count = (data_.size() + stride - 1) / stride;
+    if (slots_.size() < count) {
+      slots_.resize(count);
+      found_.resize(count);
+    }
+    searches_.assign(detail::block_count(count, match_block), 0);
+    knn_.resize(static_cast<std::size_t>(params.num_threads));
+    detail::for_each_block(
+        count, match_block, params.num_threads,
+        [&](std::size_t b, std::size_t begin, std::size_t end, int thread) {
+          std::vector<Neighbor<Scalar>>& knn = knn_[static_cast<std::size_t>(thread)];
+          std::size_t searches = 0;
+          for (std::size_t k = begin; k < end; ++k) {
+            const std::size_t j = k * stride;
+            found_[k] = 0;
+            const point_type p = t(data_[j]);
+            bool admitted = true;
+            std::apply([&](const auto&... r) { ((admitted = admitted && admits(r, ctx, p)), ...); },
+                       rejectors);
+            if (!admitted) continue;
+            if (!reuse) {
+              ++searches;
+              if (const auto nb = model.nearest(p, bound_sq)) {
+                slots_[k] = {data_[j], model.point(nb->index), nb->distance_sq, data_index_[j],
+                             nb->index};
+                found_[k] = 1;
+              }
+              continue;
+            }
+            // Reuse of the last search of this data point, made at `query`, which found the
+            // candidates (its k nearest model points within the bound) and proved every other
+            // model point at least `others` away. The point has since moved by delta, so every
+            // other model point is now at least others - delta away (triangle inequality): if the
+            // closest candidate is nearer than that, it is the nearest model point; if there was
+            // none and others - delta reaches the bound, there is none.
+            NeighborCache& c = cache_[j];
+            if (c.count != no_cache) {
+              const Scalar delta = (p - c.query).norm();
+              const Scalar margin = Scalar(64) * std::numeric_limits<Scalar>::epsilon() *
+                                    (Scalar(1) + p.template lpNorm<Eigen::Infinity>() + c.others);
+              const Scalar reach = c.others - delta - margin;
+              if (c.count == 0) {
+                if (reach >= bound) continue;
+              } else {
+                std::uint32_t best = 0;
+                Scalar best_sq = std::numeric_limits<Scalar>::infinity();
+                for (std::uint32_t q = 0; q < c.count; ++q) {
+                  const std::uint32_t index = candidates_[j * candidates + q];
+                  const point_type& m = model.point(index);
+                  Scalar d_sq = 0;  // summed per axis in order, as the kd-tree's metric does
+                  for (int d = 0; d < D; ++d)
+                    d_sq += (p[d] - m[d]) * (p[d] - m[d]);
+                  if (d_sq < best_sq) {
+                    best_sq = d_sq;
+                    best = index;
+                  }
+                }
+                if (std::sqrt(best_sq) < reach) {
+                  if (best_sq < bound_sq) {
+                    slots_[k] = {data_[j], model.point(best), best_sq, data_index_[j], best};
+                    found_[k] = 1;
+                  }
+                  continue;
+                }
+              }
+            }
+            // The k nearest within the bound: the first pairs, the k-th bounds the others.
+            ++searches;
+            model.knn(p, candidates, knn, bound_sq);
+            c.query = p;
+            c.count = static_cast<std::uint32_t>(knn.size());
+            c.others = knn.size() == candidates ? std::sqrt(knn.back().distance_sq) : bound;
+            for (std::size_t q = 0; q < knn.size(); ++q)
+              candidates_[j * candidates + q] = knn[q].index;
+            if (!knn.empty()) {
+              slots_[k] = {data_[j], model.point(knn[0].index), knn[0].distance_sq, data_index_[j],
+                           knn[0].index};
+              found_[k] = 1;
             }
           }
-          if (std::sqrt(best_sq) < reach) {
-            if (best_sq < bound_sq)
-              pairs_.push_back({data_[j], model.point(best), best_sq, data_index_[j], best});
-            continue;
-          }
-        }
-      }
-      // The k nearest within the bound: the first pairs, the k-th bounds the others.
-      ++searches;
-      model.knn(p, candidates, knn_, bound_sq);
-      c.query = p;
-      c.count = static_cast<std::uint32_t>(knn_.size());
-      c.others = knn_.size() == candidates ? std::sqrt(knn_.back().distance_sq) : bound;
-      for (std::size_t k = 0; k < knn_.size(); ++k)
-        candidates_[j * candidates + k] = knn_[k].index;
-      if (!knn_.empty())
-        pairs_.push_back({data_[j], model.point(knn_[0].index), knn_[0].distance_sq, data_index_[j],
-                          knn_[0].index});
-    }
+          searches_[b] = searches;
+        });
+    pairs_.clear();
+    for (std::size_t k = 0; k < count; ++k)
+      if (found_[k] != 0) pairs_.push_back(slots_[k]);
+    std::size_t searches = 0;
+    for (const std::size_t s : searches_)
+      searches += s;
     return searches;
   }
 
-  /// The normal equations J^T J of point-to-plane ICP at the solution, rows
-  /// J_i = [n_i^T, ((p_i - c) x n_i)^T / L] with model normals n_i (PCA of k neighbours), data
-  /// centroid c and RMS radius L, divided by the pair count.
+  /// The information of the match (IcpResult::information): the solver's normal equations at
+  /// the solution over the final pairs, their observed part (degeneracy_ratio), divided by the
+  /// residual variance.
+  void evaluate_information(const transform_type& transform, result_type& result) {
+    const NormalEquations<D, Scalar> eq = solver.linearize(
+        std::span<const correspondence_type>(pairs_), transform, params.num_threads);
+    const Scalar variance = eq.residual_variance();
+    result.residual_variance = variance;
+    PoseMatrix<D, Scalar> information = PoseMatrix<D, Scalar>::Zero();
+    detail::PointMoments<D, Scalar> points;
+    for (const auto& pr : pairs_)
+      points.add(pr.data);
+    const auto scale = points.rotation_scale();
+    if (variance > Scalar(0) && scale)
+      information = detail::ObservedPart<D, Scalar>(eq.hessian, points.centroid(), *scale,
+                                                    params.degeneracy_ratio)
+                        .matrix() /
+                    variance;
+    result.information = information;
+  }
+
+  /// The point-to-plane normal equations at the solution, with the model normals of a
+  /// ModelNormalSolver or else the PCA normals of k model neighbours of each paired model point,
+  /// in the centred coordinates of the solvers' step (rotations about the data centroid scaled by
+  /// the points' RMS lever arm about each axis: gauss_newton.hpp, PointMoments), divided by the
+  /// pair count: eigenvalues in (metres of point motion)^-2 per pair, unit-free.
   template <class Model>
   void evaluate_degeneracy(const Model& model, const transform_type& transform,
                            result_type& result) {
     constexpr int dof = result_type::dof;
     if (pairs_.size() < static_cast<std::size_t>(dof)) return;
+    std::span<const point_type> given;
+    if constexpr (ModelNormalSolver<Solver, D, Scalar>) given = solver.model_normals;
     const std::size_t k =
         params.normal_neighbors != 0 ? params.normal_neighbors : (D == 2 ? 5u : 10u);
-    point_type c = point_type::Zero();
-    for (const auto& pr : pairs_)
-      c += transform * pr.data;
-    c /= static_cast<Scalar>(pairs_.size());
-    Scalar radius_sq = 0;
-    for (const auto& pr : pairs_)
-      radius_sq += (transform * pr.data - c).squaredNorm();
-    radius_sq /= static_cast<Scalar>(pairs_.size());
-    if (!(radius_sq > Scalar(0))) return;
-    const Scalar inv_radius = Scalar(1) / std::sqrt(radius_sq);
-
-    using Matrix = Eigen::Matrix<Scalar, dof, dof>;
-    using Row = Eigen::Matrix<Scalar, dof, 1>;
-    Matrix h = Matrix::Zero();
-    std::size_t rows = 0;
-    for (const auto& pr : pairs_) {
-      if (model.knn(pr.model, k, knn_) < static_cast<std::size_t>(D)) continue;
-      point_type mean = point_type::Zero();
-      for (const auto& nb : knn_)
-        mean += model.point(nb.index);
-      mean /= static_cast<Scalar>(knn_.size());
-      Eigen::Matrix<Scalar, D, D> cov = Eigen::Matrix<Scalar, D, D>::Zero();
-      for (const auto& nb : knn_) {
-        const point_type d = model.point(nb.index) - mean;
-        cov.noalias() += d * d.transpose();
-      }
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, D, D>> eig;
-      eig.computeDirect(cov);
-      const point_type normal = eig.eigenvectors().col(0);
-      if (!normal.allFinite()) continue;
-      const point_type p = (transform * pr.data - c) * inv_radius;
-      Row j;
-      j.template head<D>() = normal;
-      if constexpr (D == 2) {
-        j(2) = p.x() * normal.y() - p.y() * normal.x();
-      } else {
-        j.template tail<3>() = p.cross(normal);
-      }
-      h.noalias() += j * j.transpose();
-      ++rows;
+    if (given.empty()) {
+      normals_.resize(pairs_.size());
+      knn_.resize(static_cast<std::size_t>(params.num_threads));
+      detail::for_each_block(
+          pairs_.size(), match_block, params.num_threads,
+          [&](std::size_t, std::size_t begin, std::size_t end, int thread) {
+            auto& knn = knn_[static_cast<std::size_t>(thread)];
+            for (std::size_t i = begin; i < end; ++i) {
+              normals_[i] = point_type::Zero();
+              if (model.knn(pairs_[i].model, k, knn) < static_cast<std::size_t>(D)) continue;
+              const PcaFit<D, Scalar> fit = fit_pca<D, Scalar>(
+                  knn.size(),
+                  [&](std::size_t m) -> decltype(auto) { return model.point(knn[m].index); });
+              const point_type n = fit.normal();
+              if (n.allFinite()) normals_[i] = n;
+            }
+          });
     }
-    if (rows < static_cast<std::size_t>(dof)) return;
-    h /= static_cast<Scalar>(rows);
-    Eigen::SelfAdjointEigenSolver<Matrix> eig(h);
+    const detail::AffineApply<D, Scalar> apply(transform);
+    const Eigen::Matrix<Scalar, D, D> rt = transform.linear().transpose();
+    const RobustKernel<Scalar> plain{};
+    const correspondence_type* first = pairs_.data();
+    const detail::Linearization<D, Scalar> lin = detail::linearize_pairs<D, Scalar>(
+        std::span<const correspondence_type>(pairs_), params.num_threads, degeneracy_scratch_,
+        [&](const correspondence_type& pr, NormalEquations<D, Scalar>& eq) {
+          const point_type n = given.empty() ? normals_[static_cast<std::size_t>(&pr - first)]
+                               : pr.model_index < given.size() ? given[pr.model_index]
+                                                               : point_type::Zero();
+          if (n.isZero(0)) return false;
+          detail::add_point_to_plane<D, Scalar>(eq, plain, n, pr, apply, rt);
+          return true;
+        });
+    const std::size_t rows = lin.equations.pairs;
+    const auto scale = lin.points.rotation_scale();
+    if (rows < static_cast<std::size_t>(dof) || !scale) return;
+    using Matrix = PoseMatrix<D, Scalar>;
+    using Row = PoseTangent<D, Scalar>;
+    const Matrix m = detail::centred_coordinates<D, Scalar>(lin.points.centroid(), *scale);
+    const Matrix h = m.transpose() * lin.equations.hessian * m / static_cast<Scalar>(rows);
+    const Eigen::SelfAdjointEigenSolver<Matrix> eig(h);
     const Scalar lambda_min = std::max(Scalar(0), eig.eigenvalues()(0));
     const Scalar lambda_max = eig.eigenvalues()(dof - 1);
     result.smallest_eigenvalue = lambda_min;
     result.condition_number =
         lambda_min > Scalar(0) ? lambda_max / lambda_min : std::numeric_limits<Scalar>::infinity();
-    result.weakest_direction = Row(eig.eigenvectors().col(0));
+    // In the model frame: the translation (and in 3D the rotation axis) turned by R.
+    Row weakest = eig.eigenvectors().col(0);
+    weakest.template head<D>() = transform.linear() * weakest.template head<D>();
+    if constexpr (D == 3)
+      weakest.template tail<3>() = transform.linear() * weakest.template tail<3>();
+    result.weakest_direction = weakest;
     if (lambda_min < params.degeneracy_threshold) {
       result.reason = IcpTermination::degenerate;
       result.converged = false;
@@ -476,12 +589,20 @@ class BasicIcp {
     point_type query = point_type::Zero();  ///< where it was searched (model frame)
   };
 
+  /// Data points per block of the parallel search (a constant: see the file comment).
+  static constexpr std::size_t match_block = 128;
+
   std::vector<point_type> data_;
   std::vector<std::uint32_t> data_index_;
   std::vector<NeighborCache> cache_;
   std::vector<std::uint32_t> candidates_;  ///< reuse_candidates model indices per data point
   std::vector<correspondence_type> pairs_;
-  std::vector<Neighbor<Scalar>> knn_;
+  std::vector<correspondence_type> slots_;          ///< the pair of each searched data point
+  std::vector<std::uint8_t> found_;                 ///< whether slots_[k] holds a pair
+  std::vector<std::size_t> searches_;               ///< searches per block
+  std::vector<std::vector<Neighbor<Scalar>>> knn_;  ///< one k-NN buffer per thread
+  std::vector<point_type> normals_;                 ///< degeneracy check: normal per pair
+  std::vector<detail::Linearization<D, Scalar>> degeneracy_scratch_;
 };
 
 /// Point-to-point ICP with the closed-form solver of the dimension and the given rejectors.

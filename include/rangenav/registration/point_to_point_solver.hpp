@@ -1,13 +1,14 @@
 #pragma once
-// Closed-form point-to-point solvers: the rigid transform T minimising
-//   E(R, t) = sum_i |m_i - (R d_i + t)|^2      (Eq. (1) of paper 000)
-// over a set of pairs, in 2D (the atan2 form, Eq. (5)-(6) of paper 003) and 3D (SVD of the
-// cross-covariance, Arun / Umeyama, with the reflection case corrected).
+// Point-to-point solver: the rigid transform T minimising
+//   E(R, t) = sum_i w_i |m_i - (R d_i + t)|^2      (Eq. (1) of paper 000)
+// over a set of pairs, in closed form in 2D (the atan2 form, Eq. (5)-(6) of paper 003) and 3D (SVD
+// of the cross-covariance, Arun / Umeyama, with the reflection case corrected). The weights w_i
+// are 1, or the IRLS weights rho'(|m_i - T d_i|^2) of a robust kernel at the current transform
+// (one re-weighting per ICP iteration). With a pose prior the objective is no longer closed-form:
+// Gauss-Newton steps on E plus the prior's term start from the closed-form solution.
 //
-// A TransformSolver<S, D> is any type with `std::optional<Transform<D, Scalar>>
-// solve(std::span<const Correspondence<D, Scalar>>) const` and `min_pairs`; it returns nullopt
-// when the pairs do not determine a transform (too few, all data points identical, collinear
-// in 3D).
+// The protocol (TransformSolver) is in transform_solver.hpp. The closed form returns nullopt when
+// the pairs do not determine a transform (too few, all data points identical, collinear in 3D).
 
 #include <Eigen/Core>
 #include <Eigen/SVD>
@@ -17,100 +18,193 @@
 #include <limits>
 #include <optional>
 #include <span>
+#include <vector>
 
+#include "rangenav/core/robust_kernel.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/registration/correspondence.hpp"
+#include "rangenav/registration/gauss_newton.hpp"
+#include "rangenav/registration/transform_solver.hpp"
 
 namespace rangenav {
 
-template <class S, int D, class Scalar>
-concept TransformSolver = requires(const S& s, std::span<const Correspondence<D, Scalar>> pairs) {
-  { s.solve(pairs) } -> std::same_as<std::optional<Transform<D, Scalar>>>;
-  { S::min_pairs } -> std::convertible_to<std::size_t>;
-};
+namespace detail {
 
-template <int D, std::floating_point Scalar = double>
-struct PointToPointSolver;
+/// The closed-form weighted point-to-point solution (see the file comment); `weight(i)` gives
+/// w_i >= 0, or `unit_weights` for all ones (then no multiplication at all).
+struct UnitWeights {};
+inline constexpr UnitWeights unit_weights{};
 
-/// 2D: with centroids c_m, c_d and centred points m', d',
-///   theta = atan2(sum(m'_y d'_x - m'_x d'_y), sum(m'_x d'_x + m'_y d'_y))   (Eq. (5), paper 003)
-///   t = c_m - R(theta) c_d                                                   (Eq. (6), paper 003)
-/// (paper 003 writes the inverse rotation; this is the same law for T mapping data onto model).
-template <std::floating_point Scalar>
-struct PointToPointSolver<2, Scalar> {
-  static constexpr std::size_t min_pairs = 2;
-
-  [[nodiscard]] std::optional<Transform<2, Scalar>> solve(
-      std::span<const Correspondence<2, Scalar>> pairs) const {
-    if (pairs.size() < min_pairs) return std::nullopt;
-    const Scalar n = static_cast<Scalar>(pairs.size());
-    Point<2, Scalar> cm = Point<2, Scalar>::Zero(), cd = Point<2, Scalar>::Zero();
-    for (const auto& c : pairs) {
-      cm += c.model;
-      cd += c.data;
+template <class Scalar, class Weight>
+[[nodiscard]] std::optional<Transform<2, Scalar>> point_to_point_closed_form(
+    std::span<const Correspondence<2, Scalar>> pairs, const Weight& weight) {
+  constexpr bool unit = std::is_same_v<Weight, UnitWeights>;
+  const auto w_of = [&](std::size_t i) {
+    if constexpr (unit)
+      return Scalar(1);
+    else
+      return weight(i);
+  };
+  Scalar n = 0;
+  Point<2, Scalar> cm = Point<2, Scalar>::Zero(), cd = Point<2, Scalar>::Zero();
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    if constexpr (unit) {
+      cm += pairs[i].model;
+      cd += pairs[i].data;
+    } else {
+      const Scalar w = w_of(i);
+      cm += w * pairs[i].model;
+      cd += w * pairs[i].data;
+      n += w;
     }
-    cm /= n;
-    cd /= n;
-    Scalar sin_sum = 0, cos_sum = 0, spread_sq = 0;
-    for (const auto& c : pairs) {
-      const Point<2, Scalar> m = c.model - cm, d = c.data - cd;
+  }
+  if constexpr (unit) n = static_cast<Scalar>(pairs.size());
+  if (!(n > Scalar(0))) return std::nullopt;
+  cm /= n;
+  cd /= n;
+  Scalar sin_sum = 0, cos_sum = 0, spread_sq = 0;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const Point<2, Scalar> m = pairs[i].model - cm, d = pairs[i].data - cd;
+    if constexpr (unit) {
       sin_sum += m.y() * d.x() - m.x() * d.y();
       cos_sum += m.x() * d.x() + m.y() * d.y();
       spread_sq += d.squaredNorm();
+    } else {
+      const Scalar w = w_of(i);
+      sin_sum += w * (m.y() * d.x() - m.x() * d.y());
+      cos_sum += w * (m.x() * d.x() + m.y() * d.y());
+      spread_sq += w * d.squaredNorm();
     }
-    // All data points identical: the rotation is undetermined.
-    if (!(spread_sq > n * std::numeric_limits<Scalar>::epsilon() * (Scalar(1) + cd.squaredNorm())))
-      return std::nullopt;
-    const Scalar theta = std::atan2(sin_sum, cos_sum);
-    Transform<2, Scalar> t = Transform<2, Scalar>::Identity();
-    t.linear() = Eigen::Rotation2D<Scalar>(theta).toRotationMatrix();
-    t.translation() = cm - t.linear() * cd;
-    if (!t.matrix().allFinite()) return std::nullopt;
-    return t;
   }
-};
+  // All data points identical: the rotation is undetermined.
+  if (!(spread_sq > n * std::numeric_limits<Scalar>::epsilon() * (Scalar(1) + cd.squaredNorm())))
+    return std::nullopt;
+  const Scalar theta = std::atan2(sin_sum, cos_sum);
+  Transform<2, Scalar> t = Transform<2, Scalar>::Identity();
+  t.linear() = Eigen::Rotation2D<Scalar>(theta).toRotationMatrix();
+  t.translation() = cm - t.linear() * cd;
+  if (!t.matrix().allFinite()) return std::nullopt;
+  return t;
+}
 
 /// 3D: R = V diag(1, 1, det(V U^T)) U^T from the SVD H = U S V^T of the cross-covariance
-/// H = sum d' m'^T (the diagonal term corrects a reflection); t = c_m - R c_d.
-template <std::floating_point Scalar>
-struct PointToPointSolver<3, Scalar> {
-  static constexpr std::size_t min_pairs = 3;
-
-  [[nodiscard]] std::optional<Transform<3, Scalar>> solve(
-      std::span<const Correspondence<3, Scalar>> pairs) const {
-    if (pairs.size() < min_pairs) return std::nullopt;
-    const Scalar n = static_cast<Scalar>(pairs.size());
-    Point<3, Scalar> cm = Point<3, Scalar>::Zero(), cd = Point<3, Scalar>::Zero();
-    for (const auto& c : pairs) {
-      cm += c.model;
-      cd += c.data;
+/// H = sum w d' m'^T (the diagonal term corrects a reflection); t = c_m - R c_d.
+template <class Scalar, class Weight>
+[[nodiscard]] std::optional<Transform<3, Scalar>> point_to_point_closed_form(
+    std::span<const Correspondence<3, Scalar>> pairs, const Weight& weight) {
+  constexpr bool unit = std::is_same_v<Weight, UnitWeights>;
+  Scalar n = 0;
+  Point<3, Scalar> cm = Point<3, Scalar>::Zero(), cd = Point<3, Scalar>::Zero();
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    if constexpr (unit) {
+      cm += pairs[i].model;
+      cd += pairs[i].data;
+    } else {
+      const Scalar w = weight(i);
+      cm += w * pairs[i].model;
+      cd += w * pairs[i].data;
+      n += w;
     }
-    cm /= n;
-    cd /= n;
-    Eigen::Matrix<Scalar, 3, 3> h = Eigen::Matrix<Scalar, 3, 3>::Zero();
-    Eigen::Matrix<Scalar, 3, 3> data_cov = Eigen::Matrix<Scalar, 3, 3>::Zero();
-    for (const auto& c : pairs) {
-      const Point<3, Scalar> d = c.data - cd;
-      h.noalias() += d * (c.model - cm).transpose();
-      data_cov.noalias() += d * d.transpose();
-    }
-    // Identical or collinear data points leave a rotation undetermined (second singular value
-    // of the data spread ~ 0).
-    const Eigen::JacobiSVD<Eigen::Matrix<Scalar, 3, 3>> spread(data_cov);
-    const auto sv = spread.singularValues();
-    const Scalar tiny = Scalar(64) * std::numeric_limits<Scalar>::epsilon();
-    if (!(sv(0) > tiny * n * (Scalar(1) + cd.squaredNorm())) || !(sv(1) > tiny * sv(0)))
-      return std::nullopt;
-    const Eigen::JacobiSVD<Eigen::Matrix<Scalar, 3, 3>> svd(
-        h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    const Eigen::Matrix<Scalar, 3, 3> u = svd.matrixU(), v = svd.matrixV();
-    Eigen::Matrix<Scalar, 3, 1> diag(1, 1, (v * u.transpose()).determinant() < 0 ? -1 : 1);
-    Transform<3, Scalar> t = Transform<3, Scalar>::Identity();
-    t.linear() = v * diag.asDiagonal() * u.transpose();
-    t.translation() = cm - t.linear() * cd;
-    if (!t.matrix().allFinite()) return std::nullopt;
-    return t;
   }
+  if constexpr (unit) n = static_cast<Scalar>(pairs.size());
+  if (!(n > Scalar(0))) return std::nullopt;
+  cm /= n;
+  cd /= n;
+  Eigen::Matrix<Scalar, 3, 3> h = Eigen::Matrix<Scalar, 3, 3>::Zero();
+  Eigen::Matrix<Scalar, 3, 3> data_cov = Eigen::Matrix<Scalar, 3, 3>::Zero();
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const Point<3, Scalar> d = pairs[i].data - cd;
+    if constexpr (unit) {
+      h.noalias() += d * (pairs[i].model - cm).transpose();
+      data_cov.noalias() += d * d.transpose();
+    } else {
+      const Point<3, Scalar> wd = weight(i) * d;
+      h.noalias() += wd * (pairs[i].model - cm).transpose();
+      data_cov.noalias() += wd * d.transpose();
+    }
+  }
+  // Identical or collinear data points leave a rotation undetermined (second singular value
+  // of the data spread ~ 0).
+  const Eigen::JacobiSVD<Eigen::Matrix<Scalar, 3, 3>> spread(data_cov);
+  const auto sv = spread.singularValues();
+  const Scalar tiny = Scalar(64) * std::numeric_limits<Scalar>::epsilon();
+  if (!(sv(0) > tiny * n * (Scalar(1) + cd.squaredNorm())) || !(sv(1) > tiny * sv(0)))
+    return std::nullopt;
+  const Eigen::JacobiSVD<Eigen::Matrix<Scalar, 3, 3>> svd(
+      h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix<Scalar, 3, 3> u = svd.matrixU(), v = svd.matrixV();
+  Eigen::Matrix<Scalar, 3, 1> diag(1, 1, (v * u.transpose()).determinant() < 0 ? -1 : 1);
+  Transform<3, Scalar> t = Transform<3, Scalar>::Identity();
+  t.linear() = v * diag.asDiagonal() * u.transpose();
+  t.translation() = cm - t.linear() * cd;
+  if (!t.matrix().allFinite()) return std::nullopt;
+  return t;
+}
+
+}  // namespace detail
+
+/// Point-to-point solver in D = 2 or 3 dimensions (see the file comment). Models TransformSolver.
+template <int D, std::floating_point Scalar = double>
+struct PointToPointSolver {
+  static_assert(D == 2 || D == 3, "PointToPointSolver: dimension must be 2 or 3");
+  static constexpr std::size_t min_pairs = D == 2 ? 2 : 3;  ///< fewer do not determine one
+
+  /// Robust kernel on the squared pair distance |m - T d|^2 (m^2): its delta is a distance.
+  RobustKernel<Scalar> kernel{};
+  /// Gauss-Newton steps after the closed form when a prior is given.
+  int gauss_newton_steps = 3;
+  /// Steps stop when the update moves less than this (m, and rad).
+  Scalar step_epsilon = Scalar(1e-7);
+
+  /// The closed-form solution of the (unit-weight) pairs.
+  [[nodiscard]] std::optional<Transform<D, Scalar>> solve(
+      std::span<const Correspondence<D, Scalar>> pairs) const {
+    if (pairs.size() < min_pairs) return std::nullopt;
+    return detail::point_to_point_closed_form<Scalar>(pairs, detail::unit_weights);
+  }
+
+  /// The next transform of an ICP iteration (see the file comment).
+  [[nodiscard]] std::optional<Transform<D, Scalar>> solve(
+      std::span<const Correspondence<D, Scalar>> pairs, const SolveContext<D, Scalar>& ctx) const {
+    if (pairs.size() < min_pairs) return std::nullopt;
+    std::optional<Transform<D, Scalar>> t;
+    if (kernel.type == RobustKernelType::none) {
+      t = detail::point_to_point_closed_form<Scalar>(pairs, detail::unit_weights);
+    } else {
+      const detail::AffineApply<D, Scalar> apply(ctx.current);
+      t = detail::point_to_point_closed_form<Scalar>(pairs, [&](std::size_t i) {
+        return kernel.weight((pairs[i].model - apply(pairs[i].data)).squaredNorm());
+      });
+    }
+    if (!t || ctx.prior == nullptr) return t;
+    return detail::gauss_newton<D, Scalar>(pairs, *t, ctx, gauss_newton_steps, step_epsilon,
+                                           Scalar(0), scratch_, Residual{this})
+        .value_or(*t);
+  }
+
+  /// The normal equations of sum_i rho(|T d_i - m_i|^2) at t.
+  [[nodiscard]] NormalEquations<D, Scalar> linearize(
+      std::span<const Correspondence<D, Scalar>> pairs, const Transform<D, Scalar>& t,
+      int num_threads) const {
+    return detail::linearize_at<D, Scalar>(pairs, t, num_threads, scratch_, Residual{this});
+  }
+
+ private:
+  // r = R^T (T d - m) in the data frame, Jacobian A(d) = [I | S(d)].
+  struct Residual {
+    const PointToPointSolver* solver;
+    template <class Apply>
+    bool operator()(const Correspondence<D, Scalar>& pr, const Apply& apply,
+                    const Eigen::Matrix<Scalar, D, D>& rt, NormalEquations<D, Scalar>& eq) const {
+      const Point<D, Scalar> r = rt * (apply(pr.data) - pr.model);
+      detail::add_point_residual<D, Scalar>(
+          eq, solver->kernel, detail::rotation_jacobian<Scalar>(pr.data), r,
+          Eigen::Matrix<Scalar, D, D>::Identity(), static_cast<std::size_t>(D));
+      return true;
+    }
+  };
+
+  mutable std::vector<detail::Linearization<D, Scalar>> scratch_;
 };
 
 }  // namespace rangenav

@@ -62,17 +62,18 @@ template <class Scalar>
 class KnnCollector {
  public:
   KnnCollector(Neighbor<Scalar>* data, std::size_t capacity, Scalar bound_sq)
-      : data_(data), capacity_(capacity), bound_sq_(bound_sq) {}
+      : data_(data), capacity_(capacity), worst_(bound_sq) {}
 
-  [[nodiscard]] Scalar worstDist() const {
-    return count_ == capacity_ ? data_[capacity_ - 1].distance_sq : bound_sq_;
-  }
+  /// The bound a new point must beat: the k-th distance once k points are held, else the bound
+  /// given (kept in a member: the tree asks at every node).
+  [[nodiscard]] Scalar worstDist() const { return worst_; }
   bool addPoint(Scalar distance_sq, std::uint32_t index) {
-    if (!(distance_sq < worstDist())) return true;
+    if (!(distance_sq < worst_)) return true;
     std::size_t i = count_ < capacity_ ? count_++ : capacity_ - 1;
     for (; i > 0 && data_[i - 1].distance_sq > distance_sq; --i)
       data_[i] = data_[i - 1];
     data_[i] = {index, distance_sq};
+    if (count_ == capacity_) worst_ = data_[capacity_ - 1].distance_sq;
     return true;
   }
   [[nodiscard]] bool full() const { return count_ == capacity_; }
@@ -82,7 +83,7 @@ class KnnCollector {
   Neighbor<Scalar>* data_;
   std::size_t capacity_;
   std::size_t count_ = 0;
-  Scalar bound_sq_;
+  Scalar worst_;
 };
 
 /// The single closest point under a strict bound (nanoflann result-set protocol).
