@@ -28,8 +28,8 @@ namespace {
 
 /// Translation error (m) and rotation error (deg) of an estimate against the truth.
 template <int D>
-std::pair<double, double> error(const Transform<D, double>& estimate,
-                                const Transform<D, double>& truth) {
+std::pair<double, double> pose_error(const Transform<D, double>& estimate,
+                                     const Transform<D, double>& truth) {
   const Transform<D, double> e = estimate.inverse(Eigen::Isometry) * truth;
   return {e.translation().norm(), std::abs(rotation_angle(e)) * 180 / std::numbers::pi};
 }
@@ -73,7 +73,7 @@ int main() {
   AlignSettings<double> settings;  // GICP, 1 m correspondence distance, one thread
   settings.max_correspondence_distance = 0.5;
   const auto scan = align(target2, source2, odometry, settings);
-  const auto [scan_m, scan_deg] = error<2>(scan.transform, motion2);
+  const auto [scan_m, scan_deg] = pose_error<2>(scan.transform, motion2);
   std::printf(
       "1. two scans: %s after %d iterations, fitness %.2f, rmse %.3f m; error %.4f m, "
       "%.3f deg\n",
@@ -95,7 +95,7 @@ int main() {
                             RegistrationMethod::gicp}) {
     settings.method = method;
     const auto r = align(target3, source3, Transform3d::Identity(), settings);
-    const auto [m, deg] = error<3>(r.transform, motion3);
+    const auto [m, deg] = pose_error<3>(r.transform, motion3);
     std::printf("2. room, %-14s %2d iterations, error %.4f m, %.3f deg\n", to_string(method).data(),
                 r.iterations, m, deg);
     if (method == RegistrationMethod::gicp) gicp_room_m = m;
@@ -143,7 +143,8 @@ int main() {
   settings.kernel = RobustKernel<double>::cauchy(0.03);
   const auto robust = align(target3, cluttered, Transform3d::Identity(), settings);
   std::printf("4. 33%% outliers: least squares error %.4f m, Cauchy kernel %.4f m\n",
-              error<3>(plain.transform, motion3).first, error<3>(robust.transform, motion3).first);
+              pose_error<3>(plain.transform, motion3).first,
+              pose_error<3>(robust.transform, motion3).first);
 
   // ---- 5. Threads ------------------------------------------------------------------------------
   // num_threads runs every stage in parallel (OpenMP); the sums are blocked the same way for any
@@ -167,7 +168,7 @@ int main() {
     const auto r = align(io::read_ply<double>(data / "small_gicp/target.ply"),
                          io::read_ply<double>(data / "small_gicp/source.ply"),
                          Transform3d::Identity(), settings);
-    const auto [em, edeg] = error<3>(r.transform, Transform3d(m));
+    const auto [em, edeg] = pose_error<3>(r.transform, Transform3d(m));
     kitti_m = em;
     std::printf("6. KITTI pair, GICP: %d iterations, error %.4f m, %.3f deg\n", r.iterations, em,
                 edeg);
@@ -181,6 +182,6 @@ int main() {
       "\"kitti_error_m\":%.4f}\n",
       scan.converged ? "true" : "false", scan_m, gicp_room_m,
       std::abs(guided.transform.translation().x() - prior.mean.translation().x()),
-      error<3>(robust.transform, motion3).first, same_bits ? "true" : "false", kitti_m);
+      pose_error<3>(robust.transform, motion3).first, same_bits ? "true" : "false", kitti_m);
   return 0;
 }
