@@ -530,8 +530,8 @@ class SweepReducer {
 
     void refit() {
       const Vec3 c = sum / weight;
-      const PcaFit<3, Scalar> fit = pca_of_covariance<3, Scalar>(
-          c, outer / weight - c * c.transpose(), plane.point_count);
+      const PcaFit<3, Scalar> fit =
+          pca_of_covariance<3, Scalar>(c, outer / weight - c * c.transpose(), plane.point_count);
       Vec3 n = fit.normal();
       if (n.dot(c) < Scalar(0)) n = -n;  // distance >= 0: the normal points away from P_b
       plane.normal = n;

@@ -30,7 +30,6 @@
 //
 // Randomness comes from the caller's engine: with the same engine state the result is identical.
 
-
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -174,8 +174,8 @@ class GeometricMapper {
   /// The frustum rejector of the registration.
   using Rejector = FrustumRejector<3, double>;
   /// Point-to-plane ICP against the point map's normals (see the file comment).
-  using IcpType =
-      BasicIcp<3, double, PointToPlaneSolver<3, double>, DecayingDistanceRejector<double>, Rejector>;
+  using IcpType = BasicIcp<3, double, PointToPlaneSolver<3, double>,
+                           DecayingDistanceRejector<double>, Rejector>;
 
   /// A mapper with these parameters; throws invalid_argument for invalid ones.
   explicit GeometricMapper(const GeometricMapperParams& params = {})
