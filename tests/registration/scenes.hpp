@@ -2,6 +2,7 @@
 // Synthetic scenes with known geometry for the registration and mapping tests.
 
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <vector>
 
@@ -15,7 +16,9 @@ inline void sample_segment(std::vector<Eigen::Vector2d>& out, Eigen::Vector2d a,
                            double step) {
   const double len = (b - a).norm();
   const int n = std::max(1, static_cast<int>(len / step));
-  std::mt19937 rng(static_cast<unsigned>(1000 * (a.x() + 3 * a.y() + 7 * b.x() + 11 * b.y()) + n));
+  // Through a signed integer: a negative double converted to unsigned is undefined behaviour.
+  const auto seed = static_cast<std::int64_t>(1000 * (a.x() + 3 * a.y() + 7 * b.x() + 11 * b.y()));
+  std::mt19937 rng(static_cast<std::uint32_t>(seed + n));
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int i = 0; i <= n; ++i)
     out.push_back(a + (b - a) * u(rng));

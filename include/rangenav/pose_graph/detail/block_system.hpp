@@ -155,7 +155,9 @@ class BlockSystem {
       for (int c = 0; c < B; ++c)
         column_sizes[bc * B + static_cast<std::size_t>(c)] =
             static_cast<int>((rows[bc].size() - 1) * B) + c + 1;
-    matrix_.reserve(column_sizes);
+    // An empty system (no free node) stays compressed: Eigen's reserve() of no columns leaves
+    // makeCompressed() reading past its index arrays.
+    if (n > 0) matrix_.reserve(column_sizes);
     for (std::size_t bc = 0; bc < nodes; ++bc)
       for (int c = 0; c < B; ++c) {
         const auto col = static_cast<Eigen::Index>(bc * B) + c;
@@ -165,7 +167,7 @@ class BlockSystem {
             matrix_.insert(static_cast<Eigen::Index>(br * B) + r, col) = Scalar(0);
         }
       }
-    matrix_.makeCompressed();
+    if (n > 0) matrix_.makeCompressed();
 
     // Where every block starts: column start + rank of the block row within the block column.
     const auto rank_in = [&](std::size_t br, std::size_t bc) {
