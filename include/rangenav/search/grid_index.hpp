@@ -6,7 +6,7 @@
 // query, ring by ring, stopping as soon as the next ring cannot hold a closer point. With the
 // rejection radii of ICP (a few tenths of a metre) and a sparse map (points eps_D apart) that
 // is a handful of cells; it beats the GrowingKdTree's chain of trees on the MIT CSAIL log (see
-// benchmarks/README.md, bench_slam_relations: the same mapper with either index).
+// docs/benchmarks.md, bench_slam_relations: the same mapper with either index).
 //
 // Points that would grow the array beyond `max_cells` cells (a stray reading kilometres away)
 // go to an overflow list that every query scans linearly. Indices are stable (insertion
