@@ -18,6 +18,7 @@
 #include <limits>
 #include <optional>
 #include <span>
+#include <tuple>
 #include <vector>
 
 #include "rangenav/core/robust_kernel.hpp"
@@ -35,6 +36,30 @@ namespace detail {
 struct UnitWeights {};
 inline constexpr UnitWeights unit_weights{};
 
+/// Weighted centroids of the model and data points and the weight sum n (the pair count for
+/// unit weights); nullopt when n is not positive.
+template <int D, class Scalar, class Weight>
+[[nodiscard]] std::optional<std::tuple<Point<D, Scalar>, Point<D, Scalar>, Scalar>>
+weighted_centroids(std::span<const Correspondence<D, Scalar>> pairs, const Weight& weight) {
+  constexpr bool unit = std::is_same_v<Weight, UnitWeights>;
+  Scalar n = 0;
+  Point<D, Scalar> cm = Point<D, Scalar>::Zero(), cd = Point<D, Scalar>::Zero();
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    if constexpr (unit) {
+      cm += pairs[i].model;
+      cd += pairs[i].data;
+    } else {
+      const Scalar w = weight(i);
+      cm += w * pairs[i].model;
+      cd += w * pairs[i].data;
+      n += w;
+    }
+  }
+  if constexpr (unit) n = static_cast<Scalar>(pairs.size());
+  if (!(n > Scalar(0))) return std::nullopt;
+  return std::tuple{Point<D, Scalar>(cm / n), Point<D, Scalar>(cd / n), n};
+}
+
 template <class Scalar, class Weight>
 [[nodiscard]] std::optional<Transform<2, Scalar>> point_to_point_closed_form(
     std::span<const Correspondence<2, Scalar>> pairs, const Weight& weight) {
@@ -45,23 +70,9 @@ template <class Scalar, class Weight>
     else
       return weight(i);
   };
-  Scalar n = 0;
-  Point<2, Scalar> cm = Point<2, Scalar>::Zero(), cd = Point<2, Scalar>::Zero();
-  for (std::size_t i = 0; i < pairs.size(); ++i) {
-    if constexpr (unit) {
-      cm += pairs[i].model;
-      cd += pairs[i].data;
-    } else {
-      const Scalar w = w_of(i);
-      cm += w * pairs[i].model;
-      cd += w * pairs[i].data;
-      n += w;
-    }
-  }
-  if constexpr (unit) n = static_cast<Scalar>(pairs.size());
-  if (!(n > Scalar(0))) return std::nullopt;
-  cm /= n;
-  cd /= n;
+  const auto centroids = weighted_centroids<2, Scalar>(pairs, weight);
+  if (!centroids) return std::nullopt;
+  const auto& [cm, cd, n] = *centroids;
   Scalar sin_sum = 0, cos_sum = 0, spread_sq = 0;
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     const Point<2, Scalar> m = pairs[i].model - cm, d = pairs[i].data - cd;
@@ -93,23 +104,9 @@ template <class Scalar, class Weight>
 [[nodiscard]] std::optional<Transform<3, Scalar>> point_to_point_closed_form(
     std::span<const Correspondence<3, Scalar>> pairs, const Weight& weight) {
   constexpr bool unit = std::is_same_v<Weight, UnitWeights>;
-  Scalar n = 0;
-  Point<3, Scalar> cm = Point<3, Scalar>::Zero(), cd = Point<3, Scalar>::Zero();
-  for (std::size_t i = 0; i < pairs.size(); ++i) {
-    if constexpr (unit) {
-      cm += pairs[i].model;
-      cd += pairs[i].data;
-    } else {
-      const Scalar w = weight(i);
-      cm += w * pairs[i].model;
-      cd += w * pairs[i].data;
-      n += w;
-    }
-  }
-  if constexpr (unit) n = static_cast<Scalar>(pairs.size());
-  if (!(n > Scalar(0))) return std::nullopt;
-  cm /= n;
-  cd /= n;
+  const auto centroids = weighted_centroids<3, Scalar>(pairs, weight);
+  if (!centroids) return std::nullopt;
+  const auto& [cm, cd, n] = *centroids;
   Eigen::Matrix<Scalar, 3, 3> h = Eigen::Matrix<Scalar, 3, 3>::Zero();
   Eigen::Matrix<Scalar, 3, 3> data_cov = Eigen::Matrix<Scalar, 3, 3>::Zero();
   for (std::size_t i = 0; i < pairs.size(); ++i) {
