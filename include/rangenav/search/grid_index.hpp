@@ -31,11 +31,13 @@
 
 namespace rangenav {
 
+/// Parameters of GridIndex2.
 template <std::floating_point Scalar = double>
 struct GridIndexParams {
   Scalar cell_size = Scalar(0.25);               ///< m, edge of a cell
   std::size_t max_cells = std::size_t(1) << 24;  ///< cap of the dense array (64 MB)
 
+  /// Throws invalid_argument unless cell_size is finite and > 0 and max_cells >= 1.
   void validate() const {
     detail::require_positive("GridIndex", "cell_size", cell_size);
     if (max_cells < 1)
@@ -43,12 +45,14 @@ struct GridIndexParams {
   }
 };
 
+/// A growing uniform-grid index over 2D points (see the file comment). Models
+/// NearestNeighborSearch; indices are stable (insertion order of the finite points).
 template <std::floating_point Scalar = double>
 class GridIndex2 {
  public:
-  static constexpr int dimension = 2;
-  using scalar_type = Scalar;
-  using point_type = Point<2, Scalar>;
+  static constexpr int dimension = 2;   ///< always 2
+  using scalar_type = Scalar;           ///< coordinate type
+  using point_type = Point<2, Scalar>;  ///< a stored point (m)
 
   /// Throws invalid_argument for a cell size that is not finite and > 0.
   explicit GridIndex2(GridIndexParams<Scalar> params = {}) : params_(params) {
@@ -70,12 +74,14 @@ class GridIndex2 {
     return points_.size() - before;
   }
 
+  /// Appends one point; returns false (and stores nothing) when it is not finite.
   bool insert_point(const point_type& p) {
     if (!p.allFinite()) return false;
     add(p);
     return true;
   }
 
+  /// Removes every point; the parameters stay.
   void clear() {
     points_.clear();
     next_.clear();
@@ -84,16 +90,25 @@ class GridIndex2 {
     nx_ = ny_ = 0;
   }
 
+  /// Number of stored points.
   [[nodiscard]] std::size_t size() const { return points_.size(); }
+  /// True when no point is stored.
   [[nodiscard]] bool empty() const { return points_.empty(); }
+  /// Stored point i (the i-th finite point inserted), i < size().
   [[nodiscard]] const point_type& point(std::size_t i) const { return points_[i]; }
+  /// The stored points in insertion order, indexed as the query results are.
   [[nodiscard]] const std::vector<point_type>& points() const { return points_; }
+  /// The parameters the index was built with.
   [[nodiscard]] const GridIndexParams<Scalar>& params() const { return params_; }
+  /// Bytes held by the index's arrays (their capacity): points, cell chains, cells and the
+  /// overflow list.
   [[nodiscard]] std::size_t memory_bytes() const {
     return points_.capacity() * sizeof(point_type) + next_.capacity() * sizeof(std::uint32_t) +
            heads_.capacity() * sizeof(std::uint32_t) + overflow_.capacity() * sizeof(std::uint32_t);
   }
 
+  /// The closest stored point with distance_sq < max_distance_sq, or nothing when no point is
+  /// that close.
   [[nodiscard]] std::optional<Neighbor<Scalar>> nearest(
       const point_type& q, Scalar max_distance_sq = unbounded_sq<Scalar>) const {
     detail::NearestCollector<Scalar> c(max_distance_sq);
@@ -101,6 +116,8 @@ class GridIndex2 {
     return c.result();
   }
 
+  /// Replaces `out` by the (at most) k closest points with distance_sq < max_distance_sq,
+  /// ascending by distance; returns their count.
   std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
                   Scalar max_distance_sq = unbounded_sq<Scalar>) const {
     out.resize(k);
@@ -111,6 +128,8 @@ class GridIndex2 {
     return out.size();
   }
 
+  /// Replaces `out` by every point with distance_sq < radius_sq, ascending by distance (ties by
+  /// index); returns their count.
   std::size_t radius(const point_type& q, Scalar radius_sq,
                      std::vector<Neighbor<Scalar>>& out) const {
     out.clear();

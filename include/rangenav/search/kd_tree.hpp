@@ -138,9 +138,9 @@ template <int D, class Scalar = double>
 class KdTree {
  public:
   static_assert(D == 2 || D == 3, "KdTree: dimension must be 2 or 3");
-  static constexpr int dimension = D;
-  using scalar_type = Scalar;
-  using point_type = Point<D, Scalar>;
+  static constexpr int dimension = D;   ///< 2 or 3
+  using scalar_type = Scalar;           ///< coordinate type
+  using point_type = Point<D, Scalar>;  ///< a stored point
 
   KdTree() = default;
 
@@ -161,16 +161,24 @@ class KdTree {
     build();
   }
 
+  /// Moves the tree (points and structure; no rebuild).
   KdTree(KdTree&&) noexcept = default;
+  /// Move assignment (no rebuild).
   KdTree& operator=(KdTree&&) noexcept = default;
 
+  /// Number of stored (finite) points.
   [[nodiscard]] std::size_t size() const { return points_.size(); }
+  /// True when no point is stored.
   [[nodiscard]] bool empty() const { return points_.empty(); }
+  /// Stored point i, i < size().
   [[nodiscard]] const point_type& point(std::size_t i) const { return points_[i]; }
+  /// The stored points, indexed as the query results are.
   [[nodiscard]] const std::vector<point_type>& points() const { return points_; }
   /// The index in the input cloud of stored point i.
   [[nodiscard]] std::size_t source_index(std::size_t i) const { return has_gaps_ ? source_[i] : i; }
 
+  /// The closest stored point with distance_sq < max_distance_sq, or nothing when no point is
+  /// that close.
   [[nodiscard]] std::optional<Neighbor<Scalar>> nearest(
       const point_type& q, Scalar max_distance_sq = unbounded_sq<Scalar>) const {
     detail::NearestCollector<Scalar> c(max_distance_sq);
@@ -178,6 +186,8 @@ class KdTree {
     return c.result();
   }
 
+  /// Replaces `out` by the (at most) k closest points with distance_sq < max_distance_sq,
+  /// ascending by distance; returns their count.
   std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
                   Scalar max_distance_sq = unbounded_sq<Scalar>) const {
     if (out.size() != k) out.resize(k);  // (a call GCC does not inline: skipped when sized)
@@ -219,12 +229,15 @@ template <int D, class Scalar = double>
 class GrowingKdTree {
  public:
   static_assert(D == 2 || D == 3, "GrowingKdTree: dimension must be 2 or 3");
-  static constexpr int dimension = D;
-  using scalar_type = Scalar;
-  using point_type = Point<D, Scalar>;
+  static constexpr int dimension = D;   ///< 2 or 3
+  using scalar_type = Scalar;           ///< coordinate type
+  using point_type = Point<D, Scalar>;  ///< a stored point
 
+  /// An empty index whose trees will be built with `params`.
   explicit GrowingKdTree(KdTreeParams params = {}) : params_(params) {}
+  /// Moves the index (points and trees; no rebuild).
   GrowingKdTree(GrowingKdTree&&) noexcept = default;
+  /// Move assignment (no rebuild).
   GrowingKdTree& operator=(GrowingKdTree&&) noexcept = default;
 
   /// Appends the finite points of a cloud (one batch); returns how many were appended.
@@ -250,15 +263,21 @@ class GrowingKdTree {
     return true;
   }
 
+  /// Reserves room for n points in all (as std::vector::reserve).
   void reserve(std::size_t n) { points_.reserve(n); }
+  /// Removes every point and tree; the parameters stay.
   void clear() {
     trees_.clear();
     points_.clear();
   }
 
+  /// Number of stored points.
   [[nodiscard]] std::size_t size() const { return points_.size(); }
+  /// True when no point is stored.
   [[nodiscard]] bool empty() const { return points_.empty(); }
+  /// Stored point i (the i-th finite point inserted), i < size().
   [[nodiscard]] const point_type& point(std::size_t i) const { return points_[i]; }
+  /// The stored points in insertion order, indexed as the query results are.
   [[nodiscard]] const std::vector<point_type>& points() const { return points_; }
   /// Bytes held: the point array plus every tree's nodes and index array.
   [[nodiscard]] std::size_t memory_bytes() const {
@@ -270,6 +289,8 @@ class GrowingKdTree {
   /// Number of static trees in the chain (at most log2(size) + 1).
   [[nodiscard]] std::size_t tree_count() const { return trees_.size(); }
 
+  /// The closest stored point with distance_sq < max_distance_sq, or nothing when no point is
+  /// that close.
   [[nodiscard]] std::optional<Neighbor<Scalar>> nearest(
       const point_type& q, Scalar max_distance_sq = unbounded_sq<Scalar>) const {
     detail::NearestCollector<Scalar> c(max_distance_sq);
@@ -277,6 +298,8 @@ class GrowingKdTree {
     return c.result();
   }
 
+  /// Replaces `out` by the (at most) k closest points with distance_sq < max_distance_sq,
+  /// ascending by distance; returns their count.
   std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
                   Scalar max_distance_sq = unbounded_sq<Scalar>) const {
     if (out.size() != k) out.resize(k);  // (a call GCC does not inline: skipped when sized)

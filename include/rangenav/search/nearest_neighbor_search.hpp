@@ -27,8 +27,8 @@ namespace rangenav {
 /// One query answer: the index of a stored point and its squared distance to the query.
 template <class Scalar>
 struct Neighbor {
-  std::uint32_t index = 0;
-  Scalar distance_sq = 0;
+  std::uint32_t index = 0;  ///< the stored point's index: point(index) of the structure queried
+  Scalar distance_sq = 0;   ///< squared Euclidean distance to the query (m²)
   friend bool operator==(const Neighbor&, const Neighbor&) = default;
 };
 
@@ -141,11 +141,12 @@ void sort_by_distance(std::vector<Neighbor<Scalar>>& out) {
 template <int D, class Scalar = double>
 class BruteForceSearch {
  public:
-  static constexpr int dimension = D;
-  using scalar_type = Scalar;
-  using point_type = Point<D, Scalar>;
+  static constexpr int dimension = D;   ///< 2 or 3
+  using scalar_type = Scalar;           ///< coordinate type
+  using point_type = Point<D, Scalar>;  ///< a stored point
 
   BruteForceSearch() = default;
+  /// Stores the finite points of `cloud` (converted to Scalar), in input order.
   template <PointCloudOf<D> C>
   explicit BruteForceSearch(const C& cloud) {
     const std::size_t n = traits::size(cloud);
@@ -157,10 +158,15 @@ class BruteForceSearch {
     }
   }
 
+  /// Number of stored (finite) points.
   [[nodiscard]] std::size_t size() const { return points_.size(); }
+  /// Stored point i, i < size().
   [[nodiscard]] const point_type& point(std::size_t i) const { return points_[i]; }
+  /// The index in the input cloud of stored point i, i < size().
   [[nodiscard]] std::size_t source_index(std::size_t i) const { return source_[i]; }
 
+  /// The closest stored point with distance_sq < max_distance_sq (the first one on a tie), or
+  /// nothing when no point is that close.
   [[nodiscard]] std::optional<Neighbor<Scalar>> nearest(
       const point_type& q, Scalar max_distance_sq = unbounded_sq<Scalar>) const {
     detail::NearestCollector<Scalar> c(max_distance_sq);
@@ -168,6 +174,8 @@ class BruteForceSearch {
       c.addPoint((points_[i] - q).squaredNorm(), static_cast<std::uint32_t>(i));
     return c.result();
   }
+  /// Replaces `out` by the (at most) k closest points with distance_sq < max_distance_sq,
+  /// ascending by distance (ties by index); returns their count.
   std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
                   Scalar max_distance_sq = unbounded_sq<Scalar>) const {
     out.resize(k);
@@ -178,6 +186,8 @@ class BruteForceSearch {
     out.resize(c.size());
     return out.size();
   }
+  /// Replaces `out` by every point with distance_sq < radius_sq, ascending by distance (ties by
+  /// index); returns their count.
   std::size_t radius(const point_type& q, Scalar radius_sq,
                      std::vector<Neighbor<Scalar>>& out) const {
     out.clear();
