@@ -198,6 +198,7 @@ class CorrelativeScanMatcher {
     return value(0, static_cast<int>(std::floor((p.x() - origin_.x()) / params_.resolution)),
                  static_cast<int>(std::floor((p.y() - origin_.y()) / params_.resolution)));
   }
+  /// The parameters the matcher was built with.
   [[nodiscard]] const CorrelativeScanMatcherParams<Scalar>& params() const { return params_; }
   /// Bytes held by the grids.
   [[nodiscard]] std::size_t memory_bytes() const {

@@ -30,11 +30,11 @@ namespace rangenav {
 /// transform T of the iteration that formed the pair.
 template <int D, class Scalar>
 struct Correspondence {
-  Point<D, Scalar> data;
-  Point<D, Scalar> model;
-  Scalar distance_sq = 0;
-  std::uint32_t data_index = 0;
-  std::uint32_t model_index = 0;
+  Point<D, Scalar> data;          ///< the data point, in the data frame
+  Point<D, Scalar> model;         ///< the model point, in the model frame
+  Scalar distance_sq = 0;         ///< |model - T * data|^2 (m²)
+  std::uint32_t data_index = 0;   ///< the data point's index in the data cloud as given
+  std::uint32_t model_index = 0;  ///< the model point's index in the model's search structure
 };
 
 /// What a stage knows about the running alignment.

@@ -28,13 +28,18 @@ struct Frustum {
   Transform<D, Scalar> pose = Transform<D, Scalar>::Identity();
   Scalar near = Scalar(0);  ///< 2D: minimum range; 3D: near plane distance along +x (m)
   Scalar far = Scalar(30);  ///< 2D: maximum range; 3D: far plane distance along +x (m)
-  /// 2D only: the wedge's bearings (rad), e.g. a 180° scanner: -pi/2 .. pi/2.
+  /// 2D only: the wedge's first bearing (rad), e.g. a 180° scanner: -pi/2 .. pi/2. A bearing is
+  /// atan2(y, x) in (-pi, pi], counter-clockwise from +x.
   Scalar angle_min = -std::numbers::pi_v<Scalar> / 2;
+  /// 2D only: the wedge's last bearing (rad).
   Scalar angle_max = std::numbers::pi_v<Scalar> / 2;
-  /// 3D only: full opening angles (rad), e.g. a SwissRanger SR-3000: 47.5° x 39.6°.
+  /// 3D only: full horizontal opening angle (rad), e.g. a SwissRanger SR-3000: 47.5° x 39.6°.
   Scalar horizontal_fov = Scalar(47.5) * std::numbers::pi_v<Scalar> / 180;
+  /// 3D only: full vertical opening angle (rad).
   Scalar vertical_fov = Scalar(39.6) * std::numbers::pi_v<Scalar> / 180;
 
+  /// Throws invalid_argument unless pose is a finite rigid transform and 0 <= near < far
+  /// (finite); in 2D angle_min < angle_max (finite), in 3D both opening angles in (0, pi).
   void validate() const {
     constexpr std::string_view where = "Frustum";
     if (!is_rigid(pose, Scalar(1e-4)))
@@ -90,14 +95,16 @@ struct Frustum {
 /// §3.2), pairs whose model point lies outside the data sensor's current frustum are dropped.
 template <int D, std::floating_point Scalar = double>
 struct FrustumRejector {
+  /// Which frustum is tested, against which points.
   enum class Mode {
     data_in_model_frustum,  ///< `frustum.pose` is the model sensor's pose in the model frame
     model_in_data_frustum,  ///< `frustum.pose` is the data sensor's pose in the data frame
   };
-  Frustum<D, Scalar> frustum{};
-  Mode mode = Mode::data_in_model_frustum;
+  Frustum<D, Scalar> frustum{};             ///< the sensor's frustum; `mode` says whose
+  Mode mode = Mode::data_in_model_frustum;  ///< which test runs
 
   FrustumRejector() = default;
+  /// A rejector testing frustum `f` in mode `m` (the frustum is not validated here).
   explicit FrustumRejector(const Frustum<D, Scalar>& f, Mode m = Mode::data_in_model_frustum)
       : frustum(f), mode(m) {}
 
@@ -111,11 +118,17 @@ struct FrustumRejector {
     }
   }
 
+  /// Mode data_in_model_frustum: true when data point `p`, already moved into the model frame
+  /// by the current estimate, lies inside the frustum (needs begin(), which ICP calls). Always
+  /// true in the other mode.
   [[nodiscard]] bool admits(const IcpContext<D, Scalar>&, const Point<D, Scalar>& p) const {
     return mode != Mode::data_in_model_frustum ||
            contains_local(model_to_sensor_ * p, tan_half_h_, tan_half_v_);
   }
 
+  /// Mode model_in_data_frustum: drops the pairs whose model point lies outside the data
+  /// sensor's frustum, placed in the model frame by ctx.transform. Does nothing in the other
+  /// mode.
   void reject(const IcpContext<D, Scalar>& ctx,
               std::vector<Correspondence<D, Scalar>>& pairs) const {
     if (mode != Mode::model_in_data_frustum) return;

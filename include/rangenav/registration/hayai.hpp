@@ -80,6 +80,7 @@ enum class HayaiFeatureType : std::uint8_t {
   inflection  ///< the range keeps rising or falling through the corner: a corner seen obliquely
 };
 
+/// The enumerator's name: "maximum", "minimum" or "inflection".
 [[nodiscard]] constexpr std::string_view to_string(HayaiFeatureType type) {
   switch (type) {
     case HayaiFeatureType::maximum:
@@ -137,7 +138,7 @@ struct HayaiParams {
   /// A range jump between neighbouring valid beams is a jump edge when it exceeds
   /// jump_distance_min + jump_distance_ratio · (nearer range) (m, -).
   Scalar jump_distance_min{Scalar(0.15)};
-  Scalar jump_distance_ratio{Scalar(0.1)};
+  Scalar jump_distance_ratio{Scalar(0.1)};  ///< the range-proportional part of that threshold (-)
   /// ... and when it exceeds this many times the range steps next to it (a wall seen at a
   /// grazing angle has large but smoothly growing steps, a jump edge stands out).
   Scalar jump_smoothness_ratio{Scalar(3)};
@@ -181,6 +182,8 @@ struct HayaiParams {
   /// predicted, and odometry that misses part of a turn (not in the paper, whose 75 Hz scans turn
   /// little between scans).
   Scalar recovery_rotation_max{deg_to_rad(Scalar(12))};
+  /// The step of those retries (rad); 0, or a step larger than recovery_rotation_max, disables
+  /// them.
   Scalar recovery_rotation_step{deg_to_rad(Scalar(3))};
   /// Without odometry, a scan HAYAI cannot register moves the pose by the constant-velocity
   /// prediction (the failure is still reported); false keeps the pose instead.
@@ -234,6 +237,7 @@ enum class HayaiStatus : std::uint8_t {
   unconfirmed  ///< fewer than verified_matches pairs, and their pose disagrees with the prediction
 };
 
+/// The enumerator's name, e.g. "success" or "too_few_matches".
 [[nodiscard]] constexpr std::string_view to_string(HayaiStatus status) {
   switch (status) {
     case HayaiStatus::success:
@@ -254,15 +258,15 @@ enum class HayaiStatus : std::uint8_t {
 /// (current scan), with its Eq. (4) distance.
 template <std::floating_point Scalar = double>
 struct HayaiPair {
-  std::uint32_t model{0};
-  std::uint32_t data{0};
-  Scalar distance{0};
+  std::uint32_t model{0};  ///< index of the feature in the model (reference scan) feature list
+  std::uint32_t data{0};   ///< index of the feature in the data (current scan) feature list
+  Scalar distance{0};      ///< Eq. (4) distance (m), the data feature moved by the prediction
 };
 
 /// The outcome of registering a scan against a reference scan.
 template <std::floating_point Scalar = double>
 struct HayaiMatchResult {
-  HayaiStatus status{HayaiStatus::featureless};
+  HayaiStatus status{HayaiStatus::featureless};  ///< success, or why there is no pose
   /// Δp: the current scan's pose in the reference scan's frame (maps data onto model, Eq. 5-6).
   /// Identity unless status == success.
   Pose2<Scalar> shift{};
@@ -273,6 +277,7 @@ struct HayaiMatchResult {
   std::size_t matched{0};         ///< pairs used for the pose
   Scalar rms_residual{0};         ///< RMS of ‖m_i − (R d_i + t)‖ over the used pairs (m)
 
+  /// True when status == success: `shift` and `covariance` hold the registration.
   [[nodiscard]] bool ok() const { return status == HayaiStatus::success; }
 };
 
@@ -309,12 +314,14 @@ template <std::floating_point Scalar>
 template <std::floating_point Scalar = double>
 class HayaiFeatureExtractor {
  public:
-  using feature_type = HayaiFeature<Scalar>;
+  using feature_type = HayaiFeature<Scalar>;  ///< a feature found
 
+  /// Throws invalid_argument for invalid `params` (see HayaiParams::validate).
   explicit HayaiFeatureExtractor(const HayaiParams<Scalar>& params = {}) : params_(params) {
     params_.validate("HayaiFeatureExtractor");
   }
 
+  /// The parameters.
   [[nodiscard]] const HayaiParams<Scalar>& params() const { return params_; }
 
   /// Replaces `features` by the features of `scan`, in beam order. Invalid beams split the polar
@@ -360,6 +367,7 @@ class HayaiFeatureExtractor {
     std::rotate(features.begin(), wrap, features.end());
   }
 
+  /// The features of `scan`, in beam order, in a new vector (as the overload above).
   [[nodiscard]] std::vector<feature_type> extract(const LaserScan<Scalar>& scan) {
     std::vector<feature_type> features;
     extract(scan, features);
@@ -563,13 +571,15 @@ class HayaiFeatureExtractor {
 template <std::floating_point Scalar = double>
 class HayaiMatcher {
  public:
-  using feature_type = HayaiFeature<Scalar>;
-  using pair_type = HayaiPair<Scalar>;
+  using feature_type = HayaiFeature<Scalar>;  ///< a feature of M or D
+  using pair_type = HayaiPair<Scalar>;        ///< a pair of M and D
 
+  /// Throws invalid_argument for invalid `params` (see HayaiParams::validate).
   explicit HayaiMatcher(const HayaiParams<Scalar>& params = {}) : params_(params) {
     params_.validate("HayaiMatcher");
   }
 
+  /// The parameters.
   [[nodiscard]] const HayaiParams<Scalar>& params() const { return params_; }
 
   /// Eq. (4): weighted polar + Cartesian distance, with Θ = ∞ for features of different types.
@@ -840,6 +850,8 @@ struct HayaiOdometryNoise {
   /// odometry's increment otherwise (HAYAI found a wrong match). 0: odometry always wins.
   std::size_t trusted_matches{4};
 
+  /// Throws invalid_argument naming the first violated contract: the four growth rates must be
+  /// finite and >= 0, the two floors and innovation_gate finite and > 0.
   void validate(std::string_view where = "HayaiOdometryNoise") const {
     detail::require_non_negative(where, "translation_per_metre", translation_per_metre);
     detail::require_non_negative(where, "translation_per_radian", translation_per_radian);
@@ -870,6 +882,7 @@ enum class HayaiIncrementSource : std::uint8_t {
   none                ///< HAYAI failed, no odometry, coast_on_failure off: the pose is unchanged
 };
 
+/// The enumerator's name, e.g. "fused" or "constant_velocity".
 [[nodiscard]] constexpr std::string_view to_string(HayaiIncrementSource source) {
   switch (source) {
     case HayaiIncrementSource::first_scan:
@@ -892,6 +905,7 @@ enum class HayaiIncrementSource : std::uint8_t {
 template <std::floating_point Scalar = double>
 struct HayaiTrackResult {
   HayaiMatchResult<Scalar> match;  ///< HAYAI's registration of the scan onto the reference
+  /// Where `increment` came from.
   HayaiIncrementSource source{HayaiIncrementSource::first_scan};
   Pose2<Scalar> increment{};        ///< Δp applied by Eq. (3)
   Pose2<Scalar> pose{};             ///< p_{n+1}
@@ -905,8 +919,10 @@ struct HayaiTrackResult {
 template <std::floating_point Scalar = double>
 class HayaiTracker {
  public:
-  using Matrix3 = Eigen::Matrix<Scalar, 3, 3>;
+  using Matrix3 = Eigen::Matrix<Scalar, 3, 3>;  ///< a covariance of (x, y, θ)
 
+  /// Starts at `initial_pose` (the pose of the first scan) with zero covariance. Throws
+  /// invalid_argument for invalid `params` or `odometry_noise`.
   explicit HayaiTracker(const HayaiParams<Scalar>& params = {},
                         const HayaiOdometryNoise<Scalar>& odometry_noise = {},
                         const Pose2<Scalar>& initial_pose = {})
@@ -929,6 +945,8 @@ class HayaiTracker {
     return step(scan, odometry_increment);
   }
 
+  /// The pose of the last scan tracked (the last result's `pose`), in the frame `initial_pose`
+  /// is given in.
   [[nodiscard]] const Pose2<Scalar>& pose() const { return pose_; }
   /// Covariance of (x, y, θ) accumulated since the initial pose (grows without loop closure).
   [[nodiscard]] const Matrix3& covariance() const { return covariance_; }
@@ -938,6 +956,7 @@ class HayaiTracker {
   }
   /// Pairs used by the last successful or failed registration (indices into the features).
   [[nodiscard]] const std::vector<HayaiPair<Scalar>>& last_pairs() const { return pairs_; }
+  /// The HAYAI parameters.
   [[nodiscard]] const HayaiParams<Scalar>& params() const { return matcher_.params(); }
 
   /// Forgets the reference scan and restarts at `pose` with zero covariance.

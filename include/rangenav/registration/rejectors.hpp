@@ -41,11 +41,13 @@ struct DecayingDistanceRejector {
     return std::max(final_distance,
                     initial_distance * std::pow(decay, static_cast<Scalar>(iteration)));
   }
+  /// The search bound of the context's iteration: d_k² (m²).
   template <int D>
   [[nodiscard]] Scalar max_distance_sq(const IcpContext<D, Scalar>& ctx) const {
     const Scalar d = distance(ctx.iteration);
     return d * d;
   }
+  /// True once the threshold has decayed to final_distance (ICP may then declare convergence).
   template <int D>
   [[nodiscard]] bool settled(const IcpContext<D, Scalar>& ctx) const {
     return distance(ctx.iteration) <= final_distance;
@@ -55,6 +57,8 @@ struct DecayingDistanceRejector {
 /// Keeps, for every model point that several data points paired with, only the closest pair
 /// (Zinßer et al. 2003; paper 002 §6.3): one model point cannot be the image of two data points.
 struct UniqueModelPointRejector {
+  /// Drops, per model point, every pair but the one with the smallest distance_sq; the kept
+  /// pairs end up sorted by model_index.
   template <int D, class Scalar>
   void reject(const IcpContext<D, Scalar>&, std::vector<Correspondence<D, Scalar>>& pairs) const {
     std::sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) {
@@ -74,11 +78,14 @@ template <std::floating_point Scalar = double>
 struct TrimmedRejector {
   Scalar overlap = Scalar(0.9);  ///< fraction of pairs kept, in (0, 1]
 
+  /// Throws invalid_argument unless 0 < overlap <= 1.
   void validate() const {
     if (!(overlap > Scalar(0) && overlap <= Scalar(1)))
       detail::throw_invalid_argument("TrimmedRejector", "overlap", overlap, "must be in (0, 1]");
   }
 
+  /// Keeps the ceil(overlap · n) of the n pairs with the smallest distance_sq, in no particular
+  /// order.
   template <int D>
   void reject(const IcpContext<D, Scalar>&, std::vector<Correspondence<D, Scalar>>& pairs) const {
     const auto keep = static_cast<std::size_t>(
@@ -94,6 +101,7 @@ struct TrimmedRejector {
 template <std::floating_point Scalar = double>
 struct MaxDistanceRejector {
   Scalar max_distance = Scalar(1.0);  ///< m
+  /// The search bound: max_distance² (m²), the same at every iteration.
   template <int D>
   [[nodiscard]] Scalar max_distance_sq(const IcpContext<D, Scalar>&) const {
     return max_distance * max_distance;
