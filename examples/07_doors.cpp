@@ -11,9 +11,9 @@
 //   3. drive the corridor with the doors closed, open and partially open, and localize with
 //      standard MCL (doors removed from the map) and with door-aware MCL (a Kalman-filtered angle
 //      per door in every particle, §IV), printing the mean and maximum position errors;
-//   4. draw the paper's Fig. 4 to doors_out/doors.svg: the grid with the detected doors' angle
-//      ranges, and below it the likelihood field of the static map with the door states
-//      door-aware MCL estimated (doors 30 deg open); end with one JSON line.
+//   4. draw the paper's Fig. 4 to doors_out/doors.svg (support/door_figure.hpp): the grid with
+//      the detected doors' angle ranges, and below it the likelihood field of the static map with
+//      the door states door-aware MCL estimated (doors 30 deg open); end with one JSON line.
 // Run it as `07_doors [seed]`. Global localization (the paper's Fig. 8-9) is measured by
 // tools/doors_global_localization.
 
@@ -22,14 +22,11 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
 #include <numbers>
 #include <random>
-#include <string>
 #include <utility>
 #include <vector>
 
-#include <rangenav/io/svg.hpp>
 #include <rangenav/localization/door_mcl.hpp>
 #include <rangenav/localization/mcl.hpp>
 #include <rangenav/mapping/doors.hpp>
@@ -37,6 +34,8 @@
 #include <rangenav/sim/robot.hpp>
 #include <rangenav/sim/sensors.hpp>
 #include <rangenav/sim/worlds.hpp>
+
+#include "support/door_figure.hpp"
 
 using namespace rangenav;
 
@@ -156,58 +155,6 @@ TrackingResult track(const sim::World& world, const CorridorMap& map, std::uint6
   return r;
 }
 
-// ---- 4. Fig. 4 -------------------------------------------------------------------------------
-
-/// The grid with the detected doors' angle ranges and the robot's path; below it the sensor model
-/// of door-aware MCL over the map, p(z | x, m, doors) of a beam end point every 0.1 m with the
-/// doors at `states` (six grey levels, darker = more likely, below 2 % of the peak blank).
-void draw_fig4(const CorridorMap& m, const std::vector<Pose2d>& path,
-               const DoorAwareState& states) {
-  io::SvgDrawing svg;
-  std::vector<Point2d> occupied;
-  for (int y = 0; y < m.grid.height(); ++y)
-    for (int x = 0; x < m.grid.width(); ++x)
-      if (m.grid.is_occupied({x, y})) occupied.push_back(m.grid.cell_center({x, y}));
-  svg.layer("static grid").points(occupied, {.stroke = "black", .point_radius_px = 1.0});
-  svg.layer("doors (blue: min angle, red: max angle)");
-  for (const DoorModel& d : m.doors) {
-    svg.segment(d.hinge, d.leaf_end(d.opening_min), {.stroke = "blue", .stroke_width_px = 2});
-    svg.segment(d.hinge, d.leaf_end(d.opening_max), {.stroke = "red", .stroke_width_px = 2});
-    svg.circle(d.hinge, 0.05, {.stroke = "black", .fill = "black"});
-  }
-  svg.layer("robot path").path(path, {.stroke = "green"});
-
-  const Point2d lo = m.grid.origin();
-  const Point2d size = Point2d(m.grid.width(), m.grid.height()) * m.grid.resolution();
-  const Point2d below(0, size.y() + 1.0);  // the second picture's offset
-  const DoorAwareMcl model(m.grid, m.doors);
-  std::vector<std::pair<Point2d, double>> samples;
-  double peak = 0;
-  for (double y = lo.y() + 0.05; y < lo.y() + size.y(); y += 0.1)
-    for (double x = lo.x() + 0.05; x < lo.x() + size.x(); x += 0.1) {
-      samples.emplace_back(Point2d(x, y) - below,
-                           std::exp(model.end_point_log_likelihood({x, y}, states)));
-      peak = std::max(peak, samples.back().second);
-    }
-  std::vector<std::vector<Point2d>> by_level(6);
-  for (const auto& [q, p] : samples)
-    if (p >= 0.02 * peak)
-      by_level[std::min<std::size_t>(5, static_cast<std::size_t>(6 * p / peak))].push_back(q);
-  svg.layer("likelihood field of the static map, estimated door states");
-  for (std::size_t l = 0; l < 6; ++l) {  // 0.1 m is about 4.4 px in a 1000 px picture of 22 m
-    const std::string grey = std::to_string(230 - 230 * (l + 1) / 6);
-    svg.points(by_level[l],
-               {.stroke = "rgb(" + grey + "," + grey + "," + grey + ")", .point_radius_px = 2.3});
-  }
-  svg.layer("estimated doors (30 deg open)");
-  for (std::size_t k = 0; k < m.doors.size(); ++k)
-    svg.segment(m.doors[k].hinge - below, m.doors[k].leaf_end(states.doors[k].mean) - below,
-                {.stroke = "orange", .stroke_width_px = 1.5});
-  std::filesystem::create_directories("doors_out");
-  svg.save("doors_out/doors.svg");
-  std::printf("wrote doors_out/doors.svg\n");
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -224,7 +171,10 @@ int main(int argc, char** argv) {
         "%.3f m\n",
         name, r.mcl.mean, r.mcl.max, r.door_mcl.mean, r.door_mcl.max);
   }
-  draw_fig4(map, runs[0].truth, runs[2].door_states);  // step 4, the doors 30 deg open
+  // Step 4: Fig. 4 with the door states estimated in the run with the doors 30 deg open.
+  examples::draw_door_figure(map.grid, map.doors, runs[0].truth, runs[2].door_states,
+                             "doors_out/doors.svg");
+  std::printf("wrote doors_out/doors.svg\n");
 
   std::printf(
       "{\"doors_true\": %zu, \"doors_detected\": %zu, \"mcl_mean_err_m\": {\"closed\": %.4f, "
