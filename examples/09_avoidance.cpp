@@ -14,49 +14,32 @@
 // (pitching_blind_range). While the robot turns on the spot in front of an object, the map's
 // ageing (§4.4.2) would forget it there; VirtualMapParams::blind_range keeps such points.
 //
-// Run it as `09_avoidance [svg]` (the drawing is written when a path is given). Both runs are
-// repeated with four noise seeds; it exits with status 1 unless every 2D run touches something and
-// no 3D run anything (ctest runs it as a check). The last line printed is JSON.
+// Run it as `09_avoidance [svg]` to also draw the runs (the arena and its drawing are in
+// support/arena.hpp). Both runs are repeated with four noise seeds; it exits with status 1 unless
+// every 2D run touches something and no 3D run anything (ctest runs it as a check). The last line
+// printed is JSON.
 
-#include <cmath>
+#include <cstdint>
 #include <iostream>
 #include <numbers>
 #include <random>
 #include <set>
-#include <string>
 #include <vector>
 
 #include "rangenav/control/reactive.hpp"
 #include "rangenav/egocentric/pitching_stream.hpp"
 #include "rangenav/egocentric/virtual_map.hpp"
-#include "rangenav/io/svg.hpp"
 #include "rangenav/sim/robot.hpp"
 #include "rangenav/sim/sensors.hpp"
+
+#include "support/arena.hpp"
 
 using namespace rangenav;
 
 namespace {
 
-constexpr double arena = 4.5;       // m, square arena
-constexpr double exit_width = 1.1;  // m, gap in the right wall at the far corner
-constexpr double duration = 45.0;   // s of simulated time per run
-constexpr double speed = 0.3;       // m/s, the commanded translational velocity (§5.2)
-
-sim::World make_arena(const std::vector<Point2d>& objects) {
-  sim::World w;
-  const double h = 0.8;  // movable walls
-  w.add_wall({0, 0}, {arena, 0}, h);
-  w.add_wall({0, 0}, {0, arena}, h);
-  w.add_wall({0, arena}, {arena, arena}, h);
-  w.add_wall({arena, 0}, {arena, arena - exit_width}, h);
-  for (std::size_t i = 0; i < objects.size(); ++i)  // boxes and cans
-    if (i % 2 == 0)
-      w.add_box({objects[i], {0.14, 0.10}, 0.3 * static_cast<double>(i), 0.0, 0.08});
-    else
-      w.add_cylinder({objects[i], 0.05, 0.0, 0.10});
-  w.build_index();
-  return w;
-}
+constexpr double duration = 45.0;  // s of simulated time per run
+constexpr double speed = 0.3;      // m/s, the commanded translational velocity (§5.2)
 
 struct RunResult {
   std::vector<Point2d> trajectory;  // every 0.1 s
@@ -153,7 +136,7 @@ RunResult run(const sim::World& world, bool three_d, std::size_t wall_count, uns
       result.trajectory.push_back(robot.pose().position());
       result.times.push_back(robot.time());
     }
-    result.escaped = robot.pose().x > arena + 0.3;
+    result.escaped = robot.pose().x > arena::side + 0.3;
   }
   return result;
 }
@@ -171,17 +154,17 @@ int main(int argc, char** argv) {
   // Where do the objects go? Into the robot's way: a first 2D run in the empty arena gives the
   // path the behaviours take; the test objects are put on it, as one would lay them out in front
   // of the real robot.
-  const sim::World empty = make_arena({});
+  const sim::World empty = arena::world({});
   const std::size_t walls = empty.walls().size();
   const RunResult probe = run(empty, false, walls, 2);
   std::vector<Point2d> objects;  // one every 5 s from 6 s on, away from the walls
   for (std::size_t i = 0; i < probe.times.size() && objects.size() < 5; ++i) {
     const Point2d p = probe.trajectory[i];
     if (probe.times[i] >= 6.0 + 5.0 * static_cast<double>(objects.size()) && p.x() > 0.4 &&
-        p.y() > 0.4 && p.x() < arena - 0.4 && p.y() < arena - 0.4)
+        p.y() > 0.4 && p.x() < arena::side - 0.4 && p.y() < arena::side - 0.4)
       objects.push_back(p);
   }
-  const sim::World world = make_arena(objects);
+  const sim::World world = arena::world(objects);
 
   const RunResult flat = run(world, false, walls, 2);
   const RunResult nodding = run(world, true, walls, 3);
@@ -195,22 +178,15 @@ int main(int argc, char** argv) {
     contacts_3d_all += run(world, true, walls, 3 + 10 * k).contacts;
   }
 
-  std::cout << "arena " << arena << " m x " << arena << " m, exit " << exit_width << " m wide; "
-            << objects.size() << " small objects (8-10 cm high) on the floor\n";
+  std::cout << "arena " << arena::side << " m x " << arena::side << " m, exit " << arena::exit_width
+            << " m wide; " << objects.size() << " small objects (8-10 cm high) on the floor\n";
   print("2D perception (scanner horizontal): ", flat);
   print("3D perception (scanner nodding):    ", nodding);
   std::cout << "over " << trials << " noise seeds: 2D perception touched something in "
             << collided_2d << ", 3D perception made " << contacts_3d_all << " contacts in all\n";
 
   if (argc > 1) {  // the arena, the objects and the two runs' paths
-    io::SvgDrawing svg({.size_px = 700});
-    for (const sim::Wall& w : world.walls())
-      svg.layer("walls").segment(w.a, w.b, {.stroke = "black", .stroke_width_px = 2.5});
-    for (const Point2d& o : objects)
-      svg.layer("small objects").circle(o, 0.07, {.stroke = "#d35400", .fill = "#f5b041"});
-    svg.layer("2D perception").polyline(flat.trajectory, {.stroke = "crimson"});
-    svg.layer("3D perception").polyline(nodding.trajectory, {.stroke = "#27ae60"});
-    svg.save(argv[1]);
+    arena::draw(world, objects, flat.trajectory, nodding.trajectory, argv[1]);
     std::cout << "wrote " << argv[1] << '\n';
   }
   std::cout << "{\"contacts_2d\": " << flat.contacts << ", \"contacts_3d\": " << nodding.contacts
