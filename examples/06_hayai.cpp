@@ -9,11 +9,9 @@
 //      odometry by the tracker's EKF;
 //   2. tracks the real MIT CSAIL log (when present) and scores it with the SLAM-benchmark
 //      relations;
-//   3. draws the tracked paths into hayai_corridor.svg (and hayai_csail.svg).
-//
-//   06_hayai [mit-csail.clf[.gz] [mit-csail.relations]]
-//
-// Without arguments the CSAIL log is looked up in the shared data folder and skipped when absent.
+//   3. draws the paths into hayai_corridor.svg and hayai_csail.svg (support/tracked_paths.hpp).
+// Run it as `06_hayai [mit-csail.clf[.gz] [mit-csail.relations]]`; without arguments the CSAIL
+// log is looked up in the shared data folder and skipped when absent.
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -32,20 +30,15 @@
 #include "rangenav/sim/sensors.hpp"
 #include "rangenav/sim/worlds.hpp"
 
+#include "support/tracked_paths.hpp"
+
 using namespace rangenav;
 
 namespace {
 
-double distance(const Pose2d& a, const Pose2d& b) {
-  return std::hypot(a.x - b.x, a.y - b.y);
-}
-
 // Part 1 ----------------------------------------------------------------------------------------
 struct SimulationResult {
-  double us_per_scan{0};
-  double hayai_drift_per_m{0};
-  double fused_drift_per_m{0};
-  double odometry_drift_per_m{0};
+  double us_per_scan{0}, hayai_drift_per_m{0}, fused_drift_per_m{0}, odometry_drift_per_m{0};
   std::size_t scans{0}, failures{0};
 };
 
@@ -73,19 +66,16 @@ SimulationResult track_corridor() {
   // Odometry that overestimates distance by 3 % and drifts 0.02° per scan to the left.
   std::normal_distribution<double> jitter(0.0, 0.002);
   HayaiTracker<double> alone({}, {}, truth.front()), fused({}, {}, truth.front());
-  std::vector<Pose2d> path_alone{truth.front()}, path_fused{truth.front()}, path_odometry;
+  std::vector<Pose2d> path_alone{truth.front()}, path_fused{truth.front()},
+      path_odometry{truth.front()};
   Pose2d odometry = truth.front();
-  path_odometry.push_back(odometry);
   SimulationResult result;
-  double seconds = 0;
-  double travelled = 0;
-  for (std::size_t k = 0; k < truth.size(); ++k) {
+  double seconds = 0, travelled = 0;
+  const auto first = scanner.scan(scene.world, truth.front(), rng);  // the first reference
+  alone.track(first);
+  fused.track(first);
+  for (std::size_t k = 1; k < truth.size(); ++k) {
     const auto scan = scanner.scan(scene.world, truth[k], rng);
-    if (k == 0) {
-      alone.track(scan);
-      fused.track(scan);
-      continue;
-    }
     const Pose2d motion = relative(truth[k - 1], truth[k]);
     travelled += std::hypot(motion.x, motion.y);
     const Pose2d measured{motion.x * 1.03 + jitter(rng), motion.y + jitter(rng),
@@ -100,26 +90,19 @@ SimulationResult track_corridor() {
     path_alone.push_back(r.pose);
     path_fused.push_back(fused.track(scan, measured).pose);
   }
+  const auto drift = [&](const std::vector<Pose2d>& path) {  // end-point error per metre driven
+    return std::hypot(path.back().x - truth.back().x, path.back().y - truth.back().y) / travelled;
+  };
   result.scans = truth.size();
   result.us_per_scan = seconds / static_cast<double>(truth.size() - 1) * 1e6;
-  result.hayai_drift_per_m = distance(path_alone.back(), truth.back()) / travelled;
-  result.fused_drift_per_m = distance(path_fused.back(), truth.back()) / travelled;
-  result.odometry_drift_per_m = distance(path_odometry.back(), truth.back()) / travelled;
+  result.hayai_drift_per_m = drift(path_alone);
+  result.fused_drift_per_m = drift(path_fused);
+  result.odometry_drift_per_m = drift(path_odometry);
 
   io::SvgDrawing svg;
-  svg.layer("walls");
-  for (const auto& w : scene.world.walls())
-    svg.segment(w.a, w.b, {.stroke = "#444"});
-  for (const auto& d : scene.world.doors()) {
-    const auto leaf = d.leaf();
-    const double c = std::cos(leaf.yaw), s = std::sin(leaf.yaw);
-    const Point2d half(c * leaf.size.x() / 2, s * leaf.size.x() / 2);
-    svg.segment(leaf.center - half, leaf.center + half, {.stroke = "#8b4513"});
-  }
+  examples::draw_walls(svg, scene.world);
   svg.layer("truth").path(truth, {.stroke = "black", .stroke_width_px = 2});
-  svg.layer("odometry").path(path_odometry, {.stroke = "orange"});
-  svg.layer("hayai").path(path_alone, {.stroke = "crimson"});
-  svg.layer("hayai + odometry (EKF)").path(path_fused, {.stroke = "royalblue"});
+  examples::draw_tracks(svg, path_odometry, path_alone, path_fused);
   svg.save("hayai_corridor.svg");
   return result;
 }
@@ -154,19 +137,13 @@ std::optional<CsailResult> track_csail(const std::filesystem::path& log,
     path_odometry.push_back(dead_reckoning);
     stamps.push_back(lasers[k].timestamp);
   }
-  CsailResult r;
-  r.scans = lasers.size();
-  r.us_per_scan = seconds / static_cast<double>(lasers.size()) * 1e6;
-  r.fused = io::evaluate_slam_relations(relations, stamps, path_fused);
-  r.alone = io::evaluate_slam_relations(relations, stamps, path_alone);
-  r.odometry = io::evaluate_slam_relations(relations, stamps, path_odometry);
-
   io::SvgDrawing svg;
-  svg.layer("odometry").path(path_odometry, {.stroke = "orange"});
-  svg.layer("hayai").path(path_alone, {.stroke = "crimson"});
-  svg.layer("hayai + odometry (EKF)").path(path_fused, {.stroke = "royalblue"});
+  examples::draw_tracks(svg, path_odometry, path_alone, path_fused);
   svg.save("hayai_csail.svg");
-  return r;
+  return CsailResult{io::evaluate_slam_relations(relations, stamps, path_fused),
+                     io::evaluate_slam_relations(relations, stamps, path_alone),
+                     io::evaluate_slam_relations(relations, stamps, path_odometry),
+                     seconds / static_cast<double>(lasers.size()) * 1e6, lasers.size()};
 }
 
 void print(const char* name, const io::RelationEvaluation& e) {
@@ -206,21 +183,17 @@ int main(int argc, char** argv) {
     std::printf("MIT CSAIL log or relations not found (%s): skipped\n", log.string().c_str());
   }
 
-  const auto json_or_null = [](bool have, double v) {
-    return have ? std::to_string(v) : std::string("null");
-  };
+  // The CSAIL figures are null when the log was skipped.
+  const CsailResult c = csail.value_or(CsailResult{});
+  const auto m = [&](double v) { return csail ? std::to_string(v) : std::string("null"); };
   std::cout << "{\"us_per_scan\": " << sim.us_per_scan
             << ", \"sim_drift_per_m\": " << sim.hayai_drift_per_m
             << ", \"sim_fused_drift_per_m\": " << sim.fused_drift_per_m
             << ", \"sim_odometry_drift_per_m\": " << sim.odometry_drift_per_m
-            << ", \"csail_trans_abs_mean_m\": "
-            << json_or_null(csail.has_value(), csail ? csail->fused.all.translation_mean : 0)
-            << ", \"csail_trans_short_m\": "
-            << json_or_null(csail.has_value(), csail ? csail->fused.short_gap.translation_mean : 0)
-            << ", \"csail_hayai_alone_trans_abs_mean_m\": "
-            << json_or_null(csail.has_value(), csail ? csail->alone.all.translation_mean : 0)
-            << ", \"csail_odometry_trans_abs_mean_m\": "
-            << json_or_null(csail.has_value(), csail ? csail->odometry.all.translation_mean : 0)
+            << ", \"csail_trans_abs_mean_m\": " << m(c.fused.all.translation_mean)
+            << ", \"csail_trans_short_m\": " << m(c.fused.short_gap.translation_mean)
+            << ", \"csail_hayai_alone_trans_abs_mean_m\": " << m(c.alone.all.translation_mean)
+            << ", \"csail_odometry_trans_abs_mean_m\": " << m(c.odometry.all.translation_mean)
             << "}\n";
   return 0;
 }
