@@ -9,17 +9,16 @@
 //   4. print a few facts about the log, ending with one JSON line a script can check.
 //
 // Run it as `01_scans [log.clf[.gz] [index of the scan to draw]]`. Without an argument it reads the
-// MIT CSAIL log of the shared data set when it is present, else a five-scan log written by this
-// program. Output: scans_out/scan.svg and scans_out/odometry.svg in the current directory.
+// MIT CSAIL log of the shared data set when it is present, else a five-scan log it writes itself
+// (support/sample_log.hpp). Output: scans_out/scan.svg and scans_out/odometry.svg in the current
+// directory.
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <numbers>
 #include <optional>
 #include <string>
 #include <variant>
@@ -32,42 +31,18 @@
 #include <rangenav/io/svg.hpp>
 #include <rangenav/scan/laser_scan.hpp>
 
+#include "support/sample_log.hpp"
+
 namespace fs = std::filesystem;
 using rangenav::Point2d;
 using rangenav::Pose2d;
 
 namespace {
 
-// A corridor 2.4 m wide, closed 8 m ahead, with a doorway on the left and a box on the right
-// floor, seen from five poses 0.5 m apart. Each FLASER record is one line:
-//   FLASER <n> <n ranges> <laser x y theta> <odometry x y theta> <timestamp> <host> <logger time>
-// The bearings are implicit: n beams spread over 180 degrees, from -90 (right) to +90 (left).
-// 81.91 is the SICK scanner's "no return" value (nothing within range, here: the open door).
-constexpr const char* sample_log = R"(# A small CARMEN log written by rangenav example 01_scans
-FLASER 37 1.21 1.22 1.22 1.23 1.27 1.32 1.38 1.45 1.57 1.70 1.87 2.08 2.40 2.43 2.33 4.64 6.91 8.05 8.00 8.03 6.92 4.64 81.91 2.85 2.40 2.09 1.88 1.70 1.57 1.45 1.39 1.32 1.28 1.24 1.23 1.20 1.20 0.000 0.000 0.000 0.000 0.000 0.000 1000.000 sample 1000.010
-FLASER 37 1.23 1.22 1.24 1.27 1.33 1.36 1.44 1.53 1.63 1.76 1.98 2.03 1.94 1.84 3.88 5.32 7.59 7.50 7.49 7.55 5.82 4.10 81.91 2.63 2.23 1.98 1.78 1.62 1.49 1.40 1.35 1.27 1.24 1.20 1.19 1.18 1.18 0.500 0.020 0.030 0.500 0.020 0.030 1000.200 sample 1000.210
-FLASER 37 1.27 1.27 1.30 1.31 1.35 1.42 1.46 1.58 1.71 1.61 1.51 1.41 1.62 3.32 4.23 5.94 7.05 7.02 7.01 7.07 5.17 3.73 81.91 81.91 2.13 1.86 1.69 1.54 1.43 1.35 1.31 1.25 1.20 1.17 1.15 1.15 1.15 1.000 0.050 0.050 1.000 0.050 0.050 1000.400 sample 1000.410
-FLASER 37 1.27 1.25 1.28 1.30 1.34 1.41 1.35 1.19 1.08 1.11 1.20 2.27 2.59 3.12 3.92 5.26 6.57 6.52 6.50 6.54 5.89 4.11 3.17 81.91 81.91 81.91 1.73 1.58 1.47 1.38 1.31 1.25 1.20 1.16 1.15 1.15 1.15 1.500 0.060 0.020 1.500 0.060 0.020 1000.600 sample 1000.610
-FLASER 37 1.25 1.25 1.22 0.82 0.81 0.82 0.86 0.89 1.61 1.75 1.92 2.16 2.47 2.90 3.57 4.65 6.09 6.03 6.03 6.02 6.07 4.62 3.47 2.77 2.35 81.91 81.91 81.91 1.51 1.43 1.34 1.28 1.25 1.19 1.16 1.17 1.14 2.000 0.050 -0.010 2.000 0.050 -0.010 1000.800 sample 1000.810
-)";
-
-// Where the log comes from: the command line, the shared data set, or the sample above.
-fs::path choose_log(int argc, char** argv, const fs::path& out_dir) {
-  if (argc > 1) return argv[1];
-  const fs::path shared = fs::path(RANGENAV_EXAMPLE_DATA_DIR) / "carmen" / "mit-csail.clf.gz";
-  if (fs::exists(shared)) return shared;
-  const fs::path sample = out_dir / "sample.clf";
-  std::ofstream(sample) << sample_log;
-  std::cout << "(shared data not found: reading the sample log written to " << sample.string()
-            << ")\n";
-  return sample;
-}
-
 // Only letters, digits and a few signs, so the name can go into the JSON line as it is.
 std::string json_safe(std::string text) {
-  for (char& c : text) {
+  for (char& c : text)
     if (c == '"' || c == '\\' || static_cast<unsigned char>(c) < 0x20) c = '_';
-  }
   return text;
 }
 
@@ -77,9 +52,12 @@ int main(int argc, char** argv) try {
   const auto start = std::chrono::steady_clock::now();
   const fs::path out_dir = "scans_out";
   fs::create_directories(out_dir);
-  const fs::path log = choose_log(argc, argv, out_dir);
+  const fs::path log = examples::choose_log(argc, argv, RANGENAV_EXAMPLE_DATA_DIR, out_dir);
 
   // ---- 1. Read the log ---------------------------------------------------------------------
+  // A laser record of the log is one line:
+  //   FLASER <n> <n ranges> <laser x y theta> <odometry x y theta> <timestamp> <host> <logger time>
+  // The bearings are implicit: n beams spread over 180 degrees, from -90 (right) to +90 (left).
   // CarmenReader streams the file (plain or .gz) one record at a time. A record is either a
   // laser scan (CarmenLaser) or an odometry reading (CarmenOdometry); other lines are skipped.
   // A malformed line throws rangenav::io_error naming the file and the line.
@@ -87,11 +65,10 @@ int main(int argc, char** argv) try {
   std::vector<rangenav::io::CarmenLaser> lasers;
   std::vector<Pose2d> odometry_records;
   while (auto record = reader.next()) {
-    if (auto* laser = std::get_if<rangenav::io::CarmenLaser>(&*record)) {
+    if (auto* laser = std::get_if<rangenav::io::CarmenLaser>(&*record))
       lasers.push_back(std::move(*laser));
-    } else {
+    else
       odometry_records.push_back(std::get<rangenav::io::CarmenOdometry>(*record).pose);
-    }
   }
   if (lasers.empty()) {
     std::cerr << "no laser scans in " << log.string() << '\n';
@@ -151,9 +128,8 @@ int main(int argc, char** argv) try {
   // world: Pose2d::transform_point. Odometry drifts, so walls seen twice do not quite overlap
   // (lesson material for scan matching later). Every step-th end point keeps the file small.
   std::vector<Pose2d> path;
-  for (const auto& laser : lasers) {
+  for (const auto& laser : lasers)
     if (laser.odom_pose) path.push_back(*laser.odom_pose);
-  }
   if (path.empty()) path = odometry_records;  // logs whose laser records carry no odometry
   const std::size_t max_drawn = 100000;
   const std::size_t step = std::max<std::size_t>(1, (valid + max_drawn - 1) / max_drawn);
@@ -163,9 +139,8 @@ int main(int argc, char** argv) try {
   for (const auto& laser : lasers) {
     const std::optional<Pose2d> pose = laser.laser_pose ? laser.laser_pose : laser.odom_pose;
     if (!pose) continue;
-    for (const Point2d& p : laser.scan.valid_points()) {
+    for (const Point2d& p : laser.scan.valid_points())
       if (counter++ % step == 0) world_points.push_back(pose->transform_point(p));
-    }
   }
   double path_length = 0;
   for (std::size_t i = 1; i < path.size(); ++i)
