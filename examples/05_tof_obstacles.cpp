@@ -13,8 +13,9 @@
 // and the virtual scan's obstacles are fused with the laser scan in an ObstacleMap.
 //
 // Then the same detection runs on real organised RGB-D clouds from ../shared/data (pcl_test,
-// mrpt_pbmap) when they are present, or on the PCD files given as arguments. Their camera pose is
-// not known, so a level camera is assumed and only the height differences of Eq. (15) count.
+// mrpt_pbmap) when they are present, or on the PCD files given as arguments, each turned into a
+// depth image by support/cloud_depth_image.hpp. Their camera pose is not known, so a level camera
+// is assumed and only the height differences of Eq. (15) count.
 //
 // Usage: 05_tof_obstacles [cloud.pcd ...]. The last line printed is JSON.
 
@@ -23,7 +24,6 @@
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
-#include <limits>
 #include <numbers>
 #include <random>
 #include <string>
@@ -36,6 +36,8 @@
 #include "rangenav/scan/tof_filters.hpp"
 #include "rangenav/sim/sensors.hpp"
 #include "rangenav/sim/worlds.hpp"
+
+#include "support/cloud_depth_image.hpp"
 
 using namespace rangenav;
 
@@ -51,43 +53,13 @@ double cpu_ms(F&& f, int repeat) {
   return 1e3 * static_cast<double>(std::clock() - t0) / CLOCKS_PER_SEC / repeat;
 }
 
-// A depth image from an organised RGB-D cloud in the optical frame (x right, y down, z ahead):
-// z-depth per pixel, and pinhole intrinsics fitted to the points by least squares
-// (column = fx x/z + cx, row = fy y/z + cy).
-DepthImage<double> depth_image_from_cloud(const Cloud3d& cloud) {
-  double sx = 0, sxx = 0, su = 0, sxu = 0, sy = 0, syy = 0, sv = 0, syv = 0, n = 0;
-  for (std::size_t r = 0; r < cloud.height; ++r)
-    for (std::size_t c = 0; c < cloud.width; ++c) {
-      const Point3d& p = cloud.at(r, c);
-      if (!p.allFinite() || p.z() <= 0) continue;
-      const double a = p.x() / p.z(), b = p.y() / p.z();
-      const auto u = static_cast<double>(c), v = static_cast<double>(r);
-      sx += a, sxx += a * a, su += u, sxu += a * u;
-      sy += b, syy += b * b, sv += v, syv += b * v;
-      n += 1;
-    }
-  DepthImage<double> img;
-  img.kind = DepthKind::z_depth;
-  img.intrinsics.width = cloud.width;
-  img.intrinsics.height = cloud.height;
-  img.intrinsics.fx = (n * sxu - sx * su) / (n * sxx - sx * sx);
-  img.intrinsics.cx = (su - img.intrinsics.fx * sx) / n;
-  img.intrinsics.fy = (n * syv - sy * sv) / (n * syy - sy * sy);
-  img.intrinsics.cy = (sv - img.intrinsics.fy * sy) / n;
-  img.depth.resize(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i)
-    img.depth[i] = cloud.points[i].allFinite() ? cloud.points[i].z()
-                                               : std::numeric_limits<double>::quiet_NaN();
-  return img;
-}
-
 std::string real_cloud_json(const std::filesystem::path& path) {
   const Cloud3d cloud = io::read_pcd<double>(path);
   if (!cloud.is_organized()) {
     std::printf("%s: not organised, skipped\n", path.filename().string().c_str());
     return {};
   }
-  const DepthImage<double> raw = depth_image_from_cloud(cloud);
+  const DepthImage<double> raw = examples::depth_image_from_cloud(cloud);
   std::size_t valid = 0;
   for (const double d : raw.depth)
     valid += DepthImage<double>::is_valid_depth(d) ? 1 : 0;
