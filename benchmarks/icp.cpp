@@ -376,6 +376,13 @@ void BM_open3d_2d_scan_to_scan(benchmark::State& state) {
 /// (its registration builds the target's kd-tree itself).
 void BM_open3d_3d(benchmark::State& state, const Pair3& (*get)(), Method method) {
   if (!have_pair_data(state, get)) return;
+  if (method == Method::gicp && get == &kitti) {
+    // Debian's Open3D 0.16 library is built with Eigen's assertions on, and its generalized ICP
+    // fails one (EigenSolver<Matrix2d>::eigenvectors() without eigenvectors) on the KITTI pair:
+    // the process would abort. The row is kept to say so (the bunny pair runs).
+    state.SkipWithError("Open3D 0.16's RegistrationGeneralizedICP aborts on an Eigen assertion");
+    return;
+  }
   const Pair3& pair = get();
   namespace reg = open3d::pipelines::registration;
   set_open3d_threads(static_cast<int>(state.range(0)));
@@ -419,9 +426,12 @@ void BM_open3d_3d(benchmark::State& state, const Pair3& (*get)(), Method method)
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
+    // Keyed by "<name>/<threads>": benchmark_name() also carries the min_time and real_time
+    // suffixes of the 3D rows.
     for (const Run& run : runs)
       if (!run.error_occurred && run.run_type == Run::RT_Iteration)
-        times_[run.benchmark_name()] = {run.GetAdjustedRealTime(), run.GetAdjustedCPUTime()};
+        times_[run.run_name.function_name + "/" + run.run_name.args] = {run.GetAdjustedRealTime(),
+                                                                        run.GetAdjustedCPUTime()};
     ConsoleReporter::ReportRuns(runs);
   }
 
