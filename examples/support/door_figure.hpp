@@ -67,7 +67,7 @@ inline void draw_door_figure(const rangenav::OccupancyGrid& grid,
   for (std::size_t k = 0; k < doors.size(); ++k)
     svg.segment(doors[k].hinge - below, doors[k].leaf_end(states.doors[k].mean) - below,
                 {.stroke = "orange", .stroke_width_px = 1.5});
-  std::filesystem::create_directories(file.parent_path());
+  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
   svg.save(file);
 }
 

@@ -155,19 +155,21 @@ class BlockSystem {
       for (int c = 0; c < B; ++c)
         column_sizes[bc * B + static_cast<std::size_t>(c)] =
             static_cast<int>((rows[bc].size() - 1) * B) + c + 1;
-    // An empty system (no free node) stays compressed: Eigen's reserve() of no columns leaves
-    // makeCompressed() reading past its index arrays.
-    if (n > 0) matrix_.reserve(column_sizes);
-    for (std::size_t bc = 0; bc < nodes; ++bc)
-      for (int c = 0; c < B; ++c) {
-        const auto col = static_cast<Eigen::Index>(bc * B) + c;
-        for (const std::size_t br : rows[bc]) {
-          const int last = br == bc ? c : B - 1;
-          for (int r = 0; r <= last; ++r)
-            matrix_.insert(static_cast<Eigen::Index>(br * B) + r, col) = Scalar(0);
+    // An empty system (no free node) stays as resize() left it: Eigen's reserve() of no columns
+    // leaves makeCompressed() reading past its index arrays.
+    if (n > 0) {
+      matrix_.reserve(column_sizes);
+      for (std::size_t bc = 0; bc < nodes; ++bc)
+        for (int c = 0; c < B; ++c) {
+          const auto col = static_cast<Eigen::Index>(bc * B) + c;
+          for (const std::size_t br : rows[bc]) {
+            const int last = br == bc ? c : B - 1;
+            for (int r = 0; r <= last; ++r)
+              matrix_.insert(static_cast<Eigen::Index>(br * B) + r, col) = Scalar(0);
+          }
         }
-      }
-    if (n > 0) matrix_.makeCompressed();
+      matrix_.makeCompressed();
+    }
 
     // Where every block starts: column start + rank of the block row within the block column.
     const auto rank_in = [&](std::size_t br, std::size_t bc) {
