@@ -13,6 +13,7 @@
 #include "rangenav/registration/frustum.hpp"
 #include "rangenav/registration/gicp_solver.hpp"
 #include "rangenav/registration/icp.hpp"
+#include "rangenav/registration/normals.hpp"
 #include "rangenav/registration/point_to_line_solver.hpp"
 #include "rangenav/registration/point_to_plane_solver.hpp"
 #include "rangenav/registration/point_to_point_solver.hpp"
@@ -690,6 +691,40 @@ TEST_CASE("ICP's neighbour reuse forms the pairs of a search in every iteration"
     PaperIcp<3, float> fast_f, reference_f;
     reference_f.params.reuse_neighbors = false;
     same(fast_f.align(tree_f, data_f), reference_f.align(tree_f, data_f));
+  }
+  SECTION("3D GICP with the model's neighbour lists, 1 and 2 threads") {
+    // BasicIcp::model_neighbors proves a data point's nearest model point among the neighbours
+    // of its last one; the reference searches the tree every time.
+    std::mt19937 rng(4);
+    const auto room = test::room_3d(rng, 1500);
+    const auto truth = make_transform3(0.15, -0.1, 0.05, 0.04, -0.03, 0.12);
+    const auto data = test::transformed<3>(room, truth.inverse(Eigen::Isometry));
+    const KdTree<3, double> tree(room), data_tree(data);
+    const NeighborLists<double> lists = neighbor_lists(tree, 10);
+    const auto model_cov = estimate_covariances(tree, lists);
+    const auto data_cov = estimate_covariances(data_tree, 10);
+    for (const int threads : {1, 2}) {
+      using Gicp = BasicIcp<3, double, GicpSolver<3, double>, MaxDistanceRejector<double>>;
+      Gicp fast, reference;
+      for (Gicp* icp : {&fast, &reference}) {
+        icp->solver.model_covariances = model_cov;
+        icp->solver.data_covariances = data_cov;
+        icp->params.reuse_neighbors = false;
+        icp->params.num_threads = threads;
+        icp->params.translation_epsilon = icp->params.rotation_epsilon = 1e-9;
+        icp->rejector<MaxDistanceRejector<double>>().max_distance = 0.5;
+      }
+      fast.model_neighbors = &lists;
+      const auto a = fast.align(tree, data_tree.points()),
+                 b = reference.align(tree, data_tree.points());
+      same(a, b);
+      CHECK(transform_error<3>(a.transform, truth).first < 1e-3);
+    }
+    Icp<3, double> wrong;
+    const NeighborLists<double> other = neighbor_lists(data_tree, 10);
+    wrong.model_neighbors = &other;
+    const KdTree<3, double> small(std::vector<Eigen::Vector3d>(room.begin(), room.begin() + 100));
+    CHECK_THROWS_AS(wrong.align(small, data), invalid_argument);
   }
 }
 

@@ -99,3 +99,44 @@ TEST_CASE("normals and covariances of a cloud follow its order; degenerate spots
   CHECK_THROWS_AS(estimate_covariances(line, 5, 0), invalid_argument);
   CHECK_THROWS_AS(estimate_covariances(line, 5, 1, 0.0), invalid_argument);
 }
+
+TEST_CASE("neighbor_lists: each point's k nearest and the reach beyond them", "[registration]") {
+  // Against the exhaustive search: the lists are its k-NN answers (the point itself first), every
+  // point outside list i is at least reach[i] from point i, and the thread count changes nothing.
+  std::mt19937 rng(5);
+  std::vector<Eigen::Vector3d> pts, truth;
+  box(rng, pts, truth);
+  const KdTree<3, double> tree(pts);
+  const BruteForceSearch<3, double> brute(pts);
+  const NeighborLists<double> lists = neighbor_lists(tree, 8), lists2 = neighbor_lists(tree, 8, 2);
+  REQUIRE(lists.size() == pts.size());
+  CHECK(lists.indices == lists2.indices);
+  CHECK(lists.reach == lists2.reach);
+  std::vector<Neighbor<double>> knn;
+  for (std::size_t i = 0; i < pts.size(); i += 7) {
+    brute.knn(pts[i], 8, knn);
+    const auto list = lists.of(i);
+    REQUIRE(list.size() == 8);
+    CHECK(list[0] == i);
+    for (std::size_t m = 0; m < 8; ++m)
+      CHECK((pts[list[m]] - pts[i]).squaredNorm() == knn[m].distance_sq);
+    CHECK(lists.reach[i] == Approx(std::sqrt(knn[7].distance_sq)));
+    std::size_t nearer_outside = 0;
+    for (std::size_t q = 0; q < pts.size(); ++q)
+      if (std::find(list.begin(), list.end(), q) == list.end() &&
+          (pts[q] - pts[i]).norm() < lists.reach[i])
+        ++nearer_outside;
+    CHECK(nearer_outside == 0);
+  }
+  // Fewer points than k: every list holds them all, nothing lies beyond.
+  const std::vector<Eigen::Vector2d> three{{0, 0}, {1, 0}, {0, 1}};
+  const NeighborLists<double> all = neighbor_lists(KdTree<2, double>(three), 5);
+  CHECK(all.of(1).size() == 3);
+  CHECK(std::isinf(all.reach[1]));
+  CHECK_THROWS_AS(neighbor_lists(tree, 0), invalid_argument);
+  CHECK_THROWS_AS(neighbor_lists(tree, 4, 0), invalid_argument);
+  CHECK_THROWS_AS(estimate_covariances(KdTree<2, double>(three), lists), invalid_argument);
+  // Normals and covariances from the lists are those from k.
+  CHECK(estimate_normals(tree, lists) == estimate_normals(tree, 8));
+  CHECK(estimate_covariances(tree, lists, 2) == estimate_covariances(tree, 8, 1));
+}

@@ -112,9 +112,11 @@ template <int D, class Scalar, class Solver, class Source>
 IcpResult<D, Scalar> run_align(const KdTree<D, Scalar>& tree, const Source& source,
                                const Transform<D, Scalar>& guess,
                                const AlignSettings<Scalar>& settings, Solver solver,
-                               const PosePrior<D, Scalar>* prior) {
+                               const PosePrior<D, Scalar>* prior,
+                               const NeighborLists<Scalar>* model_neighbors = nullptr) {
   BasicIcp<D, Scalar, Solver, MaxDistanceRejector<Scalar>> icp;
   icp.solver = std::move(solver);
+  icp.model_neighbors = model_neighbors;
   icp.params.max_iterations = settings.max_iterations;
   icp.params.translation_epsilon = settings.translation_epsilon;
   icp.params.rotation_epsilon = settings.rotation_epsilon;
@@ -175,19 +177,23 @@ IcpResult<traits::dimension_v<Target>, traits::scalar_t<Target>> align_impl(
       solver.kernel = settings.kernel;
       return run_align<D, Scalar>(tree, source_points, guess, settings, solver, prior);
     }
-    case RegistrationMethod::point_to_plane: {
-      const auto normals = estimate_normals(tree, settings.neighbors, threads);
-      PointToPlaneSolver<D, Scalar> solver;
-      solver.model_normals = normals;
-      solver.kernel = settings.kernel;
-      solver.gauss_newton_steps = 1;
-      return run_align<D, Scalar>(tree, source_points, guess, settings, solver, prior);
-    }
+    case RegistrationMethod::point_to_plane:
     case RegistrationMethod::gicp:
       break;
   }
+  // The target's neighbour lists serve its normals / covariances and ICP's correspondence
+  // search (BasicIcp::model_neighbors).
+  const NeighborLists<Scalar> target_lists = neighbor_lists(tree, settings.neighbors, threads);
+  if (settings.method == RegistrationMethod::point_to_plane) {
+    const auto normals = estimate_normals(tree, target_lists, threads);
+    PointToPlaneSolver<D, Scalar> solver;
+    solver.model_normals = normals;
+    solver.kernel = settings.kernel;
+    solver.gauss_newton_steps = 1;
+    return run_align<D, Scalar>(tree, source_points, guess, settings, solver, prior, &target_lists);
+  }
   const auto target_covariances =
-      estimate_covariances(tree, settings.neighbors, threads, settings.gicp_epsilon);
+      estimate_covariances(tree, target_lists, threads, settings.gicp_epsilon);
   const KdTree<D, Scalar>& source_tree = *trees[1];
   const auto source_covariances =
       estimate_covariances(source_tree, settings.neighbors, threads, settings.gicp_epsilon);
@@ -196,7 +202,8 @@ IcpResult<traits::dimension_v<Target>, traits::scalar_t<Target>> align_impl(
   solver.data_covariances = source_covariances;
   solver.epsilon = settings.gicp_epsilon;
   solver.kernel = settings.kernel;
-  return run_align<D, Scalar>(tree, source_tree.points(), guess, settings, solver, prior);
+  return run_align<D, Scalar>(tree, source_tree.points(), guess, settings, solver, prior,
+                              &target_lists);
 }
 
 }  // namespace detail

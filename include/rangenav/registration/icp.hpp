@@ -153,7 +153,8 @@ struct IcpResult {
   std::size_t inlier_count = 0;   ///< pairs kept by the rejectors in the last iteration
   std::size_t data_count = 0;     ///< finite data points
   /// Correspondence searches run on the model (at most iterations x data_count; fewer when
-  /// IcpParams::reuse_neighbors proved a data point's nearest model point unchanged).
+  /// IcpParams::reuse_neighbors or BasicIcp::model_neighbors proved a data point's nearest model
+  /// point without one).
   std::size_t neighbor_searches = 0;
   Scalar rmse = 0;  ///< RMS distance of the kept pairs under the final transform (m)
   /// matched_count / data_count: the fraction of data points with a model point within the
@@ -201,6 +202,12 @@ class BasicIcp {
   IcpParams<Scalar> params{};            ///< iterations, convergence, threads, degeneracy check
   Solver solver{};                       ///< public typed policy: configure it directly
   std::tuple<Rejectors...> rejectors{};  ///< applied in order every iteration
+  /// The neighbour lists of the model's points (neighbor_lists() of the model given to align()),
+  /// when the caller has them (the model's normals or covariances came from them): a data point's
+  /// nearest model point is then first looked for among the neighbours of its last one, which
+  /// proves it without a search in most iterations after the first (see match()). Must outlive
+  /// align(); null = search.
+  const NeighborLists<Scalar>* model_neighbors = nullptr;
 
   /// Default parameters, solver and rejectors.
   BasicIcp() = default;
@@ -253,6 +260,9 @@ class BasicIcp {
     params.validate();
     std::apply([](auto&... r) { (validate_rejector(r), ...); }, rejectors);
     if (model.size() == 0) detail::throw_invalid(where, "argument 'model' is empty (0 points)");
+    if (model_neighbors != nullptr && model_neighbors->size() != model.size())
+      detail::throw_invalid_argument(where, "model_neighbors->size()", model_neighbors->size(),
+                                     "must equal the model's size");
     if (traits::size(data) == 0)
       detail::throw_invalid(where, "argument 'data' is empty (0 points)");
     if (!initial_guess.matrix().allFinite())
@@ -286,6 +296,7 @@ class BasicIcp {
     IcpContext<D, Scalar> ctx{0, transform, model.size(), data_.size()};
     std::apply([&](auto&... r) { (begin_rejector(r, model.size()), ...); }, rejectors);
     pairs_.reserve(data_.size());
+    if (model_neighbors != nullptr) last_model_.assign(data_.size(), no_cache);
     const std::size_t stride = params.coarse_points > 0 ? data_.size() / params.coarse_points : 1;
     bool coarse = stride > 1;
 
@@ -375,6 +386,24 @@ class BasicIcp {
     }
     searches_.assign(detail::block_count(count, match_block), 0);
     knn_.resize(static_cast<std::size_t>(params.num_threads));
+    // The model point nearest to p among `indices`, by the kd-tree's metric (squared distance
+    // summed per axis in order, so a proven pair carries the distance a search reports).
+    const auto closest_of = [&](const point_type& p, std::span<const std::uint32_t> indices) {
+      Neighbor<Scalar> best{0, std::numeric_limits<Scalar>::infinity()};
+      for (const std::uint32_t index : indices) {
+        const point_type& m = model.point(index);
+        Scalar d_sq = 0;
+        for (int d = 0; d < D; ++d)
+          d_sq += (p[d] - m[d]) * (p[d] - m[d]);
+        if (d_sq < best.distance_sq) best = {index, d_sq};
+      }
+      return best;
+    };
+    // Rounding of the distances compared in a proof below.
+    const auto margin = [](const point_type& p, Scalar reach) {
+      return Scalar(64) * std::numeric_limits<Scalar>::epsilon() *
+             (Scalar(1) + p.template lpNorm<Eigen::Infinity>() + reach);
+    };
     detail::for_each_block(
         count, match_block, params.num_threads,
         [&](std::size_t b, std::size_t begin, std::size_t end, int thread) {
@@ -388,13 +417,36 @@ class BasicIcp {
             std::apply([&](const auto&... r) { ((admitted = admitted && admits(r, ctx, p)), ...); },
                        rejectors);
             if (!admitted) continue;
+            const auto pair_with = [&](const Neighbor<Scalar>& nb) {
+              slots_[k] = {data_[j], model.point(nb.index), nb.distance_sq, data_index_[j],
+                           nb.index};
+              found_[k] = 1;
+              if (model_neighbors != nullptr) last_model_[j] = nb.index;
+            };
+            // The nearest model point among the neighbours of a model point m (its list holds m
+            // itself): every other model point is at least reach(m) from m, so at least
+            // reach(m) - |p - m| from p (triangle inequality); a neighbour nearer than that is the
+            // nearest model point, inside the bound or not. m is the last nearest model point,
+            // then, while that proves nothing, the nearest of its neighbours (a walk towards p).
+            if (model_neighbors != nullptr && last_model_[j] != no_cache) {
+              std::uint32_t m = last_model_[j];
+              bool proven = false;
+              for (int hop = 0; hop < max_hops && !proven; ++hop) {
+                const Neighbor<Scalar> best = closest_of(p, model_neighbors->of(m));
+                const Scalar others = model_neighbors->reach[m];
+                const Scalar lever = (p - model.point(m)).norm();
+                proven = std::isinf(others) ||
+                         std::sqrt(best.distance_sq) < others - lever - margin(p, others);
+                if (proven && best.distance_sq < bound_sq) pair_with(best);
+                if (best.index == m) break;  // no nearer neighbour to walk to
+                m = best.index;
+                last_model_[j] = m;
+              }
+              if (proven) continue;
+            }
             if (!reuse) {
               ++searches;
-              if (const auto nb = model.nearest(p, bound_sq)) {
-                slots_[k] = {data_[j], model.point(nb->index), nb->distance_sq, data_index_[j],
-                             nb->index};
-                found_[k] = 1;
-              }
+              if (const auto nb = model.nearest(p, bound_sq)) pair_with(*nb);
               continue;
             }
             // Reuse of the last search of this data point, made at `query`, which found the
@@ -405,31 +457,15 @@ class BasicIcp {
             // none and others - delta reaches the bound, there is none.
             NeighborCache& c = cache_[j];
             if (c.count != no_cache) {
-              const Scalar delta = (p - c.query).norm();
-              const Scalar margin = Scalar(64) * std::numeric_limits<Scalar>::epsilon() *
-                                    (Scalar(1) + p.template lpNorm<Eigen::Infinity>() + c.others);
-              const Scalar reach = c.others - delta - margin;
+              const Scalar reach = c.others - (p - c.query).norm() - margin(p, c.others);
               if (c.count == 0) {
                 if (reach >= bound) continue;
               } else {
-                std::uint32_t best = 0;
-                Scalar best_sq = std::numeric_limits<Scalar>::infinity();
-                for (std::uint32_t q = 0; q < c.count; ++q) {
-                  const std::uint32_t index = candidates_[j * candidates + q];
-                  const point_type& m = model.point(index);
-                  Scalar d_sq = 0;  // summed per axis in order, as the kd-tree's metric does
-                  for (int d = 0; d < D; ++d)
-                    d_sq += (p[d] - m[d]) * (p[d] - m[d]);
-                  if (d_sq < best_sq) {
-                    best_sq = d_sq;
-                    best = index;
-                  }
-                }
-                if (std::sqrt(best_sq) < reach) {
-                  if (best_sq < bound_sq) {
-                    slots_[k] = {data_[j], model.point(best), best_sq, data_index_[j], best};
-                    found_[k] = 1;
-                  }
+                const Neighbor<Scalar> best = closest_of(
+                    p,
+                    std::span<const std::uint32_t>(candidates_).subspan(j * candidates, c.count));
+                if (std::sqrt(best.distance_sq) < reach) {
+                  if (best.distance_sq < bound_sq) pair_with(best);
                   continue;
                 }
               }
@@ -442,11 +478,7 @@ class BasicIcp {
             c.others = knn.size() == candidates ? std::sqrt(knn.back().distance_sq) : bound;
             for (std::size_t q = 0; q < knn.size(); ++q)
               candidates_[j * candidates + q] = knn[q].index;
-            if (!knn.empty()) {
-              slots_[k] = {data_[j], model.point(knn[0].index), knn[0].distance_sq, data_index_[j],
-                           knn[0].index};
-              found_[k] = 1;
-            }
+            if (!knn.empty()) pair_with(knn[0]);
           }
           searches_[b] = searches;
         });
@@ -589,6 +621,10 @@ class BasicIcp {
     point_type query = point_type::Zero();  ///< where it was searched (model frame)
   };
 
+  /// Steps of the walk through model_neighbors before match() falls back to a search: each costs
+  /// one list's distances (k), a search about ten times as much.
+  static constexpr int max_hops = 4;
+
   /// Data points per block of the parallel search (a constant: see the file comment).
   static constexpr std::size_t match_block = 128;
 
@@ -596,6 +632,7 @@ class BasicIcp {
   std::vector<std::uint32_t> data_index_;
   std::vector<NeighborCache> cache_;
   std::vector<std::uint32_t> candidates_;  ///< reuse_candidates model indices per data point
+  std::vector<std::uint32_t> last_model_;  ///< model_neighbors: each data point's last nearest
   std::vector<correspondence_type> pairs_;
   std::vector<correspondence_type> slots_;          ///< the pair of each searched data point
   std::vector<std::uint8_t> found_;                 ///< whether slots_[k] holds a pair

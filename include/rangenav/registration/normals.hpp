@@ -14,11 +14,15 @@
 // leaves a margin against range noise without reaching across an edge): small_gicp's
 // preprocessing default. Segal et al. and PCL use 20 (their clouds are not downsampled first).
 //
-// The kNN queries run on up to num_threads threads; every point is computed independently, so
-// the result does not depend on the thread count.
+// The kNN queries (neighbor_lists, search/nearest_neighbor_search.hpp) and the fits run on up to
+// num_threads threads; every point is computed independently, so the result does not depend on
+// the thread count. A caller that has the lists already (align() hands the target's to ICP too)
+// passes them instead of k.
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -42,26 +46,24 @@ inline constexpr double default_gicp_epsilon = 1e-3;
 
 namespace detail {
 
-/// Calls out(i, &normal) for every point i of the search structure with the PCA normal of its k
-/// nearest neighbours (itself included), or out(i, nullptr) when they are fewer than D + 1 or
-/// coincide.
+/// Calls out(i, &normal) for every point i of the search structure with the PCA normal of its
+/// neighbour list, or out(i, nullptr) when it holds fewer than D + 1 points or they coincide.
 template <NearestNeighborSearch S, class Out>
-void for_each_local_normal(const S& search, std::size_t k, int num_threads, const Out& out) {
+void for_each_local_normal(const S& search, const NeighborLists<typename S::scalar_type>& lists,
+                           int num_threads, const Out& out) {
   constexpr int D = S::dimension;
   using Scalar = typename S::scalar_type;
   constexpr std::size_t block = 256;
   for_each_block(
       search.size(), block, num_threads, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-        std::vector<Neighbor<Scalar>> knn;
-        knn.reserve(k);
         for (std::size_t i = begin; i < end; ++i) {
-          const std::size_t found = search.knn(search.point(i), k, knn);
-          if (found < static_cast<std::size_t>(D + 1)) {
+          const std::span<const std::uint32_t> list = lists.of(i);
+          if (list.size() < static_cast<std::size_t>(D + 1)) {
             out(i, static_cast<const Point<D, Scalar>*>(nullptr));
             continue;
           }
           const PcaFit<D, Scalar> fit = fit_moments<D, Scalar>(
-              found, [&](std::size_t m) -> decltype(auto) { return search.point(knn[m].index); });
+              list.size(), [&](std::size_t m) -> decltype(auto) { return search.point(list[m]); });
           if (!(fit.covariance.cwiseAbs().maxCoeff() > Scalar(0))) {
             out(i, static_cast<const Point<D, Scalar>*>(nullptr));
             continue;
@@ -70,6 +72,20 @@ void for_each_local_normal(const S& search, std::size_t k, int num_threads, cons
           out(i, n.allFinite() ? &n : nullptr);
         }
       });
+}
+
+template <NearestNeighborSearch S>
+void require_lists(std::string_view where, const S& search,
+                   const NeighborLists<typename S::scalar_type>& lists) {
+  if (lists.size() != search.size())
+    throw_invalid_argument(where, "lists.size()", lists.size(),
+                           "must equal the search structure's size");
+}
+
+template <class Scalar>
+void require_epsilon(std::string_view where, Scalar epsilon) {
+  if (!(epsilon > Scalar(0) && epsilon <= Scalar(1)))
+    throw_invalid_argument(where, "epsilon", epsilon, "must be in (0, 1]");
 }
 
 template <NearestNeighborSearch S>
@@ -86,13 +102,24 @@ void require_neighbors(std::string_view where, std::size_t k) {
 template <NearestNeighborSearch S>
 [[nodiscard]] std::vector<Point<S::dimension, typename S::scalar_type>> estimate_normals(
     const S& search, std::size_t k = default_shape_neighbors, int num_threads = 1) {
+  detail::require_neighbors<S>("estimate_normals", k);
+  detail::require_threads("estimate_normals", num_threads);
+  return estimate_normals(search, neighbor_lists(search, k, num_threads), num_threads);
+}
+
+/// As above, from the neighbour lists of the search structure's points (neighbor_lists(search,
+/// k)): one k-NN pass can serve the normals and ICP (align.hpp). Throws invalid_argument unless
+/// the lists are the structure's size and num_threads >= 1.
+template <NearestNeighborSearch S>
+[[nodiscard]] std::vector<Point<S::dimension, typename S::scalar_type>> estimate_normals(
+    const S& search, const NeighborLists<typename S::scalar_type>& lists, int num_threads = 1) {
   constexpr int D = S::dimension;
   using Scalar = typename S::scalar_type;
-  detail::require_neighbors<S>("estimate_normals", k);
+  detail::require_lists("estimate_normals", search, lists);
   detail::require_threads("estimate_normals", num_threads);
   std::vector<Point<D, Scalar>> normals(search.size(), Point<D, Scalar>::Zero());
   detail::for_each_local_normal(
-      search, k, num_threads, [&](std::size_t i, const Point<D, Scalar>* normal) {
+      search, lists, num_threads, [&](std::size_t i, const Point<D, Scalar>* normal) {
         if (normal == nullptr) return;
         normals[i] = normal->dot(search.point(i)) > Scalar(0) ? -*normal : *normal;
       });
@@ -107,18 +134,32 @@ template <NearestNeighborSearch S>
 estimate_covariances(
     const S& search, std::size_t k = default_shape_neighbors, int num_threads = 1,
     typename S::scalar_type epsilon = static_cast<typename S::scalar_type>(default_gicp_epsilon)) {
+  constexpr std::string_view where = "estimate_covariances";
+  detail::require_neighbors<S>(where, k);
+  detail::require_threads(where, num_threads);
+  detail::require_epsilon(where, epsilon);
+  return estimate_covariances(search, neighbor_lists(search, k, num_threads), num_threads, epsilon);
+}
+
+/// As above, from the neighbour lists of the search structure's points (neighbor_lists(search,
+/// k)). Throws invalid_argument unless the lists are the structure's size, num_threads >= 1 and
+/// 0 < epsilon <= 1.
+template <NearestNeighborSearch S>
+[[nodiscard]] std::vector<Eigen::Matrix<typename S::scalar_type, S::dimension, S::dimension>>
+estimate_covariances(
+    const S& search, const NeighborLists<typename S::scalar_type>& lists, int num_threads = 1,
+    typename S::scalar_type epsilon = static_cast<typename S::scalar_type>(default_gicp_epsilon)) {
   constexpr int D = S::dimension;
   using Scalar = typename S::scalar_type;
   using Matrix = Eigen::Matrix<Scalar, D, D>;
   constexpr std::string_view where = "estimate_covariances";
-  detail::require_neighbors<S>(where, k);
+  detail::require_lists(where, search, lists);
   detail::require_threads(where, num_threads);
-  if (!(epsilon > Scalar(0) && epsilon <= Scalar(1)))
-    detail::throw_invalid_argument(where, "epsilon", epsilon, "must be in (0, 1]");
+  detail::require_epsilon(where, epsilon);
   std::vector<Matrix> covariances(search.size(), Matrix::Identity());
   // V diag(eps, 1, 1) V^T = I - (1 - eps) n n^T for the unit normal n (V orthonormal).
   detail::for_each_local_normal(
-      search, k, num_threads, [&](std::size_t i, const Point<D, Scalar>* normal) {
+      search, lists, num_threads, [&](std::size_t i, const Point<D, Scalar>* normal) {
         if (normal == nullptr) return;
         covariances[i] = Matrix::Identity() - (Scalar(1) - epsilon) * *normal * normal->transpose();
       });

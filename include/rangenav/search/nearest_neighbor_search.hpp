@@ -12,13 +12,18 @@
 // Queries are const and may run concurrently from several threads; mutation (insert) may not.
 
 #include <algorithm>
+#include <cmath>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <span>
+#include <string_view>
 #include <vector>
 
+#include "rangenav/core/error.hpp"
+#include "rangenav/core/parallel.hpp"
 #include "rangenav/core/point_cloud.hpp"
 #include "rangenav/core/types.hpp"
 
@@ -135,6 +140,58 @@ void sort_by_distance(std::vector<Neighbor<Scalar>>& out) {
 }
 
 }  // namespace detail
+
+/// The k nearest stored points of every stored point of a search structure (itself included),
+/// ascending by distance, with each list's reach: every stored point not in list i is at least
+/// reach[i] away from point i (the k-th distance; +infinity when the list holds every point).
+/// The normal / covariance PCA reads its neighbourhoods from them, and ICP finds a data point's
+/// nearest model point among the neighbours of its last one without a search (icp.hpp).
+template <class Scalar>
+struct NeighborLists {
+  std::size_t k = 0;                   ///< slots per point
+  std::vector<std::uint32_t> count;    ///< neighbours found for point i (<= k)
+  std::vector<std::uint32_t> indices;  ///< k slots per point: point i's are [i k, i k + count[i])
+  std::vector<Scalar> reach;           ///< see the struct comment (a distance, not squared)
+
+  /// Number of points with a list (the search structure's size).
+  [[nodiscard]] std::size_t size() const { return count.size(); }
+  /// The neighbours of point i, nearest first.
+  [[nodiscard]] std::span<const std::uint32_t> of(std::size_t i) const {
+    return {indices.data() + i * k, count[i]};
+  }
+};
+
+/// The neighbour lists of every point of `search` (k >= 1 neighbours, itself included), queried
+/// on up to num_threads threads; each list is one k-NN query, so the thread count does not
+/// change them. Throws invalid_argument unless k >= 1 and num_threads >= 1.
+template <NearestNeighborSearch S>
+[[nodiscard]] NeighborLists<typename S::scalar_type> neighbor_lists(const S& search, std::size_t k,
+                                                                    int num_threads = 1) {
+  using Scalar = typename S::scalar_type;
+  constexpr std::string_view where = "neighbor_lists";
+  if (k < 1) detail::throw_invalid_argument(where, "k", k, "must be >= 1");
+  detail::require_threads(where, num_threads);
+  NeighborLists<Scalar> lists;
+  const std::size_t n = search.size();
+  lists.k = k;
+  lists.count.resize(n);
+  lists.indices.resize(n * k);
+  lists.reach.resize(n);
+  detail::for_each_block(n, 256, num_threads,
+                         [&](std::size_t, std::size_t begin, std::size_t end, int) {
+                           std::vector<Neighbor<Scalar>> knn;
+                           knn.reserve(k);
+                           for (std::size_t i = begin; i < end; ++i) {
+                             const std::size_t found = search.knn(search.point(i), k, knn);
+                             lists.count[i] = static_cast<std::uint32_t>(found);
+                             for (std::size_t m = 0; m < found; ++m)
+                               lists.indices[i * k + m] = knn[m].index;
+                             lists.reach[i] = found == k ? std::sqrt(knn[k - 1].distance_sq)
+                                                         : std::numeric_limits<Scalar>::infinity();
+                           }
+                         });
+  return lists;
+}
 
 /// Exhaustive search: the reference the kd-trees are tested against, and the fastest choice for
 /// a few dozen points. Non-finite points of the input are skipped (source_index maps back).
