@@ -17,7 +17,7 @@
 //   - with match_previous_scan, a constant-velocity guess is tried beside the odometry guess
 //     when they disagree (odometry that froze, then jumped);
 //   - an ICP whose solver takes model normals (PointToLineSolver) gets the map's normals.
-// On the MIT CSAIL benchmark log these cut the mean relation error from 0.48 m to 0.06 m
+// On the MIT CSAIL benchmark log these cut the mean relation error from 0.48 m to 0.08 m
 // (figures and the command in docs/benchmarks.md).
 
 #include <algorithm>
@@ -102,6 +102,12 @@ struct IncrementalMapperParams {
   /// χ² (summed covariances; default the 99.9 % quantile for 3 DOF, 16.27; 22.46 suits 6 DOF):
   /// odometry that froze and jumped is then not averaged into a good match.
   Scalar odometry_gate_chi2 = Scalar(16.27);
+  /// The map ICP solver's degeneracy_ratio (when it has one): directions of its normal
+  /// equations weaker than this fraction of the strongest stay at the start of the
+  /// registration. Unset = the solver's own (transform_solver.hpp's default_degeneracy_ratio,
+  /// 1 %: in 3D a view dominated by one plane constrains the in-plane motions only through the
+  /// normals' errors, and sliding on them fails the registration).
+  std::optional<Scalar> solver_degeneracy_ratio{};
 
   /// Throws invalid_argument naming the first parameter out of range.
   void validate() const {
@@ -119,6 +125,10 @@ struct IncrementalMapperParams {
     if (odometry_noise) odometry_noise->validate();
     detail::require_positive("IncrementalMapperParams", "sensor_sigma", sensor_sigma);
     detail::require_positive("IncrementalMapperParams", "odometry_gate_chi2", odometry_gate_chi2);
+    if (solver_degeneracy_ratio &&
+        !(*solver_degeneracy_ratio >= Scalar(0) && *solver_degeneracy_ratio < Scalar(1)))
+      detail::throw_invalid_argument("IncrementalMapperParams", "solver_degeneracy_ratio",
+                                     *solver_degeneracy_ratio, "must be in [0, 1)");
   }
 };
 
@@ -177,6 +187,9 @@ class IncrementalMapper {
       decaying.initial_distance = std::max(decaying.initial_distance, decaying.final_distance);
     }
     previous_scan_icp.params.check_degeneracy = false;
+    if constexpr (requires { icp.solver.degeneracy_ratio; })
+      if (params.solver_degeneracy_ratio)
+        icp.solver.degeneracy_ratio = *params.solver_degeneracy_ratio;
   }
 
   /// Processes one scan given in the robot frame, with the robot's odometry pose when known.
@@ -439,7 +452,7 @@ template <std::floating_point Scalar = double>
 using LaserIcp = BasicIcp<2, Scalar, PointToLineSolver<Scalar>, DecayingDistanceRejector<Scalar>>;
 
 /// The documented configuration for 2D laser SLAM (the best found on the MIT CSAIL benchmark
-/// log, 0.062 m mean relation error without loop closure; figures in docs/benchmarks.md):
+/// log, 0.078 m mean relation error without loop closure; figures in docs/benchmarks.md):
 /// scan-to-scan pre-alignment with the constant-velocity hypothesis, point-to-line map
 /// registration with a 0.5 -> 0.2 m threshold, key frames every 0.25 m / 10°, eps_D = 0.15 m,
 /// and map corrections of the scan-to-scan result above 0.5 m / 3° rejected (the scan-to-scan
@@ -454,6 +467,12 @@ template <std::floating_point Scalar = double>
   p.key_frames.min_angle = Scalar(10) * std::numbers::pi_v<Scalar> / 180;
   p.max_correction_distance = Scalar(0.5);
   p.max_correction_angle = Scalar(3) * std::numbers::pi_v<Scalar> / 180;
+  // Only numerically singular directions stay at the start: the start is a relative estimate
+  // (the scan-to-scan result), so holding a weakly observed direction there (a corridor with a
+  // few door frames) adds its error at every scan, a random walk, while the map's weak
+  // constraint is absolute. Where odometry is fused, the reported information
+  // (icp.params.degeneracy_ratio, unchanged) still hands the weak directions to the odometry.
+  p.solver_degeneracy_ratio = Scalar(1e-6);
   return p;
 }
 
