@@ -399,6 +399,12 @@ class BasicIcp {
       }
       return best;
     };
+    // Data point j (slot k) pairs with model point nb.
+    const auto pair_with = [&](std::size_t k, std::size_t j, const Neighbor<Scalar>& nb) {
+      slots_[k] = {data_[j], model.point(nb.index), nb.distance_sq, data_index_[j], nb.index};
+      found_[k] = 1;
+      if (model_neighbors != nullptr) last_model_[j] = nb.index;
+    };
     // Rounding of the distances compared in a proof below.
     const auto margin = [](const point_type& p, Scalar reach) {
       return Scalar(64) * std::numeric_limits<Scalar>::epsilon() *
@@ -417,12 +423,6 @@ class BasicIcp {
             std::apply([&](const auto&... r) { ((admitted = admitted && admits(r, ctx, p)), ...); },
                        rejectors);
             if (!admitted) continue;
-            const auto pair_with = [&](const Neighbor<Scalar>& nb) {
-              slots_[k] = {data_[j], model.point(nb.index), nb.distance_sq, data_index_[j],
-                           nb.index};
-              found_[k] = 1;
-              if (model_neighbors != nullptr) last_model_[j] = nb.index;
-            };
             // The nearest model point among the neighbours of a model point m (its list holds m
             // itself): every other model point is at least reach(m) from m, so at least
             // reach(m) - |p - m| from p (triangle inequality); a neighbour nearer than that is the
@@ -437,7 +437,7 @@ class BasicIcp {
                 const Scalar lever = (p - model.point(m)).norm();
                 proven = std::isinf(others) ||
                          std::sqrt(best.distance_sq) < others - lever - margin(p, others);
-                if (proven && best.distance_sq < bound_sq) pair_with(best);
+                if (proven && best.distance_sq < bound_sq) pair_with(k, j, best);
                 if (best.index == m) break;  // no nearer neighbour to walk to
                 m = best.index;
                 last_model_[j] = m;
@@ -446,7 +446,7 @@ class BasicIcp {
             }
             if (!reuse) {
               ++searches;
-              if (const auto nb = model.nearest(p, bound_sq)) pair_with(*nb);
+              if (const auto nb = model.nearest(p, bound_sq)) pair_with(k, j, *nb);
               continue;
             }
             // Reuse of the last search of this data point, made at `query`, which found the
@@ -465,7 +465,7 @@ class BasicIcp {
                     p,
                     std::span<const std::uint32_t>(candidates_).subspan(j * candidates, c.count));
                 if (std::sqrt(best.distance_sq) < reach) {
-                  if (best.distance_sq < bound_sq) pair_with(best);
+                  if (best.distance_sq < bound_sq) pair_with(k, j, best);
                   continue;
                 }
               }
@@ -478,7 +478,7 @@ class BasicIcp {
             c.others = knn.size() == candidates ? std::sqrt(knn.back().distance_sq) : bound;
             for (std::size_t q = 0; q < knn.size(); ++q)
               candidates_[j * candidates + q] = knn[q].index;
-            if (!knn.empty()) pair_with(knn[0]);
+            if (!knn.empty()) pair_with(k, j, knn[0]);
           }
           searches_[b] = searches;
         });
