@@ -180,7 +180,7 @@ void run(benchmark::State& state, const rangenav::io::G2oGraph<D>& records,
   options.backend = backend;
   rangenav::PoseGraphResult<double> result;
   double chi2_initial = 0;
-  double ratio_sum = 0, ceres_seconds = 0;
+  [[maybe_unused]] double ratio_sum = 0, ceres_seconds = 0;
   [[maybe_unused]] double ceres_chi2 = 0;
   [[maybe_unused]] int ceres_iterations = 0;
   for (auto _ : state) {
