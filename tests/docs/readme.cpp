@@ -64,7 +64,7 @@ TEST_CASE("README: SLAM on a CARMEN log, then a path planned on its map", "[docs
   const docs::SimulatedLog truth = docs::write_apartment_log(log_path);
 
   // [snippet:slam-log]
-  rangenav::LaserSlamMapper<double> slam(rangenav::laser_slam_params<double>());
+  rangenav::LaserSlamMapper<double> slam;    // the 2D laser setup, laser_slam_params()
   rangenav::io::CarmenReader log(log_path);  // .clf / .log, plain or gzip
   std::vector<rangenav::Pose2d> trajectory;  // one pose per scan, in the first scan's frame
   while (auto record = log.next())

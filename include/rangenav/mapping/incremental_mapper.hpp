@@ -476,8 +476,17 @@ template <std::floating_point Scalar = double>
   return p;
 }
 
-/// IncrementalMapper in the 2D laser setup; construct it with laser_slam_params().
+/// IncrementalMapper in the 2D laser setup: point-to-line registration (LaserIcp) and, when
+/// default-constructed, laser_slam_params(). It tracks the whole log against one growing map
+/// (LaserSlam adds submaps, loop closure and a pose graph).
 template <std::floating_point Scalar = double>
-using LaserSlamMapper = IncrementalMapper<2, Scalar, LaserIcp<Scalar>>;
+class LaserSlamMapper : public IncrementalMapper<2, Scalar, LaserIcp<Scalar>> {
+ public:
+  /// The 2D laser configuration, laser_slam_params().
+  LaserSlamMapper() : LaserSlamMapper(laser_slam_params<Scalar>()) {}
+  /// A configuration of one's own (validated; throws invalid_argument for bad params).
+  explicit LaserSlamMapper(IncrementalMapperParams<Scalar> p)
+      : IncrementalMapper<2, Scalar, LaserIcp<Scalar>>(p) {}
+};
 
 }  // namespace rangenav
