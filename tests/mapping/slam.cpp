@@ -101,6 +101,19 @@ TEST_CASE("CorrelativeScanMatcher finds the true pose, as the exhaustive search 
 
   // Nothing scores above the best: a search demanding more finds nothing.
   CHECK_FALSE(matcher.match(data, initial, window, match->score + 1e-3));
+
+  // Started next to the truth, where the initial pose itself scores above the threshold (the
+  // search's first lower bound), it still finds the window's maximum, not the start.
+  const Transform2d near = truth * rangenav::make_transform2(0.15, -0.1, 0.03);
+  const double at_near = matcher.score(data, near);
+  REQUIRE(at_near > 0.3);
+  const auto from_near = matcher.match(data, near, window, 0.3);
+  const auto brute_near = exhaustive.match(data, near, window, 0.3);
+  REQUIRE(from_near);
+  REQUIRE(brute_near);
+  CHECK(from_near->score == Approx(brute_near->score).epsilon(1e-5));
+  CHECK(from_near->score > at_near + 0.05);
+  CHECK((truth.inverse(Eigen::Isometry) * from_near->pose).translation().norm() < 0.1);
 }
 
 TEST_CASE("CorrelativeScanMatcher sees a look-alike place as a second peak", "[mapping][slam]") {
