@@ -187,6 +187,10 @@ class IncrementalMapper {
       decaying.initial_distance = std::max(decaying.initial_distance, decaying.final_distance);
     }
     previous_scan_icp.params.check_degeneracy = false;
+    // The previous scan is dense (neighbouring beams centimetres apart), so its second-nearest
+    // point is rarely far enough to prove the nearest still nearest after the estimate moves;
+    // keeping 4 candidates lets BasicIcp::match skip more searches (the pairs are the same).
+    previous_scan_icp.params.reuse_candidates = 4;
     if constexpr (requires { icp.solver.degeneracy_ratio; })
       if (params.solver_degeneracy_ratio)
         icp.solver.degeneracy_ratio = *params.solver_degeneracy_ratio;
