@@ -1,0 +1,121 @@
+// laser_front_end_study: how sensitive the 2D laser front end (LaserSlamMapper, no loop closure)
+// is on the MIT CSAIL benchmark log. It maps the log with laser_slam_params() and with each of its
+// settings moved one step either way, and scores every run against the Freiburg relations. The
+// front end's error over the long relations is a drift that a small change anywhere moves by
+// tenths of a metre, so one configuration's figure says little: compare the spread (mean and
+// median over the neighbourhood) when judging a change of the registration.
+//
+//   laser_front_end_study [--log LOG] [--relations FILE] [--gauss-newton-steps N]
+//
+//   --log, --relations       default: carmen/mit-csail.clf.gz and
+//   slam-benchmark/mit-csail.relations
+//                            under the shared data folder
+//   --gauss-newton-steps N   the point-to-line solver's steps per ICP iteration (default: its own)
+//
+// Prints one line per setting (mean translational error of all, short and long relations) and,
+// last, one JSON line with the neighbourhood's mean and median over all relations.
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "rangenav/io/carmen.hpp"
+#include "rangenav/io/slam_relations.hpp"
+#include "rangenav/mapping/incremental_mapper.hpp"
+
+namespace {
+
+using Params = rangenav::IncrementalMapperParams<double>;
+
+struct Setting {
+  const char* name;
+  std::function<void(Params&)> change;
+};
+
+std::vector<Setting> neighbourhood() {
+  constexpr double deg = std::numbers::pi / 180;
+  return {
+      {"laser_slam_params()", [](Params&) {}},
+      {"key frames 0.20 m", [](Params& p) { p.key_frames.min_distance = 0.2; }},
+      {"key frames 0.30 m", [](Params& p) { p.key_frames.min_distance = 0.3; }},
+      {"key frames 8 deg", [](Params& p) { p.key_frames.min_angle = 8 * deg; }},
+      {"key frames 12 deg", [](Params& p) { p.key_frames.min_angle = 12 * deg; }},
+      {"initial match 0.4 m", [](Params& p) { p.initial_match_distance = 0.4; }},
+      {"initial match 0.6 m", [](Params& p) { p.initial_match_distance = 0.6; }},
+      {"final match 0.18 m", [](Params& p) { p.final_match_distance = 0.18; }},
+      {"final match 0.22 m", [](Params& p) { p.final_match_distance = 0.22; }},
+      {"correction 0.4 m", [](Params& p) { p.max_correction_distance = 0.4; }},
+      {"correction 0.6 m", [](Params& p) { p.max_correction_distance = 0.6; }},
+      {"correction 2.5 deg", [](Params& p) { p.max_correction_angle = 2.5 * deg; }},
+      {"correction 3.5 deg", [](Params& p) { p.max_correction_angle = 3.5 * deg; }},
+      {"eps_D 0.13 m", [](Params& p) { p.map.epsilon_d = 0.13; }},
+      {"eps_D 0.17 m", [](Params& p) { p.map.epsilon_d = 0.17; }},
+  };
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::filesystem::path data(RANGENAV_EXAMPLE_DATA_DIR);
+  std::filesystem::path log_path = data / "carmen/mit-csail.clf.gz";
+  std::filesystem::path relations_path = data / "slam-benchmark/mit-csail.relations";
+  std::optional<int> steps;
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    if (arg == "--log" && i + 1 < argc) {
+      log_path = argv[++i];
+    } else if (arg == "--relations" && i + 1 < argc) {
+      relations_path = argv[++i];
+    } else if (arg == "--gauss-newton-steps" && i + 1 < argc) {
+      steps = std::atoi(argv[++i]);
+    } else {
+      std::fprintf(stderr,
+                   "usage: laser_front_end_study [--log LOG] [--relations FILE] "
+                   "[--gauss-newton-steps N]\n");
+      return 2;
+    }
+  }
+  if (!std::filesystem::exists(log_path) || !std::filesystem::exists(relations_path)) {
+    std::fprintf(stderr, "skipped: %s or %s not found\n", log_path.c_str(), relations_path.c_str());
+    return 0;
+  }
+  const auto lasers = rangenav::io::read_carmen_lasers(log_path);
+  const auto relations = rangenav::io::read_slam_relations(relations_path);
+
+  std::vector<double> all;
+  for (const auto& [name, change] : neighbourhood()) {
+    Params params = rangenav::laser_slam_params<double>();
+    change(params);
+    rangenav::LaserSlamMapper<double> mapper(params);
+    if (steps) mapper.icp.solver.gauss_newton_steps = *steps;
+    std::vector<double> stamps;
+    std::vector<rangenav::Pose2d> poses;
+    for (const auto& laser : lasers) {
+      std::optional<rangenav::Transform2d> odometry;
+      if (laser.odom_pose) odometry = laser.odom_pose->to_isometry();
+      stamps.push_back(laser.timestamp);
+      poses.push_back(rangenav::Pose2d::from_isometry(mapper.process(laser.scan, odometry).pose));
+    }
+    const auto e = rangenav::io::evaluate_slam_relations(relations, stamps, poses);
+    std::printf("%-22s all %.4f m  short %.4f m  long %.4f m\n", name, e.all.translation_mean,
+                e.short_gap.translation_mean, e.long_gap.translation_mean);
+    all.push_back(e.all.translation_mean);
+  }
+  double mean = 0;
+  for (const double a : all)
+    mean += a;
+  mean /= static_cast<double>(all.size());
+  std::vector<double> sorted = all;
+  std::sort(sorted.begin(), sorted.end());
+  std::printf("{\"settings\":%zu,\"default_m\":%.4f,\"mean_m\":%.4f,\"median_m\":%.4f}\n",
+              all.size(), all.front(), mean, sorted[sorted.size() / 2]);
+  return 0;
+}
