@@ -8,8 +8,7 @@
 //   laser_front_end_study [--log LOG] [--relations FILE] [--gauss-newton-steps N]
 //
 //   --log, --relations       default: carmen/mit-csail.clf.gz and
-//   slam-benchmark/mit-csail.relations
-//                            under the shared data folder
+//                            slam-benchmark/mit-csail.relations in the shared data folder
 //   --gauss-newton-steps N   the point-to-line solver's steps per ICP iteration (default: its own)
 //
 // Prints one line per setting (mean translational error of all, short and long relations) and,
