@@ -327,6 +327,31 @@ class CorrelativeScanMatcher {
       sum += value(h, border_[k].x + x, border_[k].y + y);
     return sum;
   }
+  // score() of the four children of the node at (x, y) (offsets 0 and s per axis, in the order
+  // 2 dx + dy) in one pass over the scan's cells, which dominates the search: the bounds are the
+  // same bits as four score() calls (each sum runs over the cells in the same order).
+  [[nodiscard]] std::array<float, 4> score_children(int h, int angle, int x, int y, int s) const {
+    const auto a = static_cast<std::size_t>(angle);
+    const float* grid = grids_[static_cast<std::size_t>(h)].data();
+    const std::ptrdiff_t shift = static_cast<std::ptrdiff_t>(y) * stride_ + x;
+    const std::ptrdiff_t sx = s, sy = static_cast<std::ptrdiff_t>(s) * stride_;
+    std::array<float, 4> sum{};
+    for (std::size_t k = inside_begin_[a]; k < inside_begin_[a + 1]; ++k) {
+      const float* g = grid + inside_[k] + shift;
+      sum[0] += g[0];
+      sum[1] += g[sy];
+      sum[2] += g[sx];
+      sum[3] += g[sx + sy];
+    }
+    for (std::size_t k = border_begin_[a]; k < border_begin_[a + 1]; ++k) {
+      const int bx = border_[k].x + x, by = border_[k].y + y;
+      sum[0] += value(h, bx, by);
+      sum[1] += value(h, bx, by + s);
+      sum[2] += value(h, bx + s, by);
+      sum[3] += value(h, bx + s, by + s);
+    }
+    return sum;
+  }
   // Algorithm 3 (depth-first branch and bound, best child first).
   void search(const std::vector<Candidate>& candidates, int h, int w, Candidate& best,
               bool& found) const {
@@ -346,13 +371,20 @@ class CorrelativeScanMatcher {
     // Children beyond the window stay at -inf and sort last (the loop stops before them).
     std::array<Candidate, 4> children;
     children.fill({c.angle, c.x, c.y, -std::numeric_limits<float>::infinity()});
-    for (int dx = 0; dx < 2; ++dx)
-      for (int dy = 0; dy < 2; ++dy) {
-        const int x = c.x + dx * s, y = c.y + dy * s;
-        if (x > w || y > w) continue;
-        children[static_cast<std::size_t>(2 * dx + dy)] = {c.angle, x, y,
-                                                           score(h - 1, c.angle, x, y)};
-      }
+    if (c.x + s <= w && c.y + s <= w) {
+      const std::array<float, 4> scores = score_children(h - 1, c.angle, c.x, c.y, s);
+      for (int i = 0; i < 4; ++i)
+        children[static_cast<std::size_t>(i)] = {c.angle, c.x + (i >> 1) * s, c.y + (i & 1) * s,
+                                                 scores[static_cast<std::size_t>(i)]};
+    } else {
+      for (int dx = 0; dx < 2; ++dx)
+        for (int dy = 0; dy < 2; ++dy) {
+          const int x = c.x + dx * s, y = c.y + dy * s;
+          if (x > w || y > w) continue;
+          children[static_cast<std::size_t>(2 * dx + dy)] = {c.angle, x, y,
+                                                             score(h - 1, c.angle, x, y)};
+        }
+    }
     std::sort(children.begin(), children.end(), by_score);
     for (std::size_t i = 0; i < children.size(); ++i) {
       if (children[i].score <= best.score) break;
