@@ -8,7 +8,9 @@
 //   solver                 the TransformSolver policy (transform_solver.hpp): closed-form
 //                          point-to-point, point-to-plane or Generalized-ICP, with an optional
 //                          robust kernel and an optional Gaussian prior on the transform;
-//   convergence check      change of the transform below the epsilons and every rejector settled.
+//   convergence check      change of the transform below the epsilons and every rejector settled;
+//                          a limit cycle ends the loop early with the budget's result
+//                          (IcpParams::skip_cycles).
 // Policies are public typed members with defaults (as in small_gicp's Registration):
 //   Icp<2, double, DecayingDistanceRejector<double>, UniqueModelPointRejector> icp;
 //   icp.params.max_iterations = 30;
@@ -30,6 +32,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
@@ -111,6 +114,15 @@ struct IcpParams {
   /// iteration always uses all points, so matched_count, fitness and the final pairs are the
   /// full set's. 0, or data with fewer than 2 coarse_points points, = all points throughout.
   std::size_t coarse_points = 0;
+  /// Stop iterating once the estimate has entered a limit cycle: the pairs flip between a few
+  /// sets and the transform between as many states, too far apart for the epsilons (tenths of
+  /// a millimetre on a laser log). Once every rejector has settled, an iteration's outcome is a
+  /// function of the transform alone (the solver is const, the pairs are those of a search),
+  /// so a transform equal bit for bit to one of the last 8 repeats the same states to the end
+  /// of the budget: ICP jumps to the state the budget would end on and runs the last iteration
+  /// only. The result is that of iterating to max_iterations (reason max_iterations,
+  /// IcpResult::cycle_period > 0); false iterates (the reference).
+  bool skip_cycles = true;
   /// Threads for the correspondence search and the reductions (see the file comment).
   int num_threads = 1;
   /// Evaluate the information matrix of the solver's objective at the solution (one more pass
@@ -146,9 +158,14 @@ struct IcpResult {
   Transform<D, Scalar> transform = Transform<D, Scalar>::Identity();  ///< data -> model frame
   bool converged = false;                                  ///< reason == IcpTermination::converged
   IcpTermination reason = IcpTermination::max_iterations;  ///< why it stopped
-  int iterations = 0;  ///< iterations run (each with a correspondence search)
+  /// Iterations run (each with a correspondence search); after a limit cycle (cycle_period >
+  /// 0), the budget's, as if they had run.
+  int iterations = 0;
   /// Of them, those on the IcpParams::coarse_points subset of the data (the first ones).
   int coarse_iterations = 0;
+  /// The period of the limit cycle the estimate entered (IcpParams::skip_cycles), 0 when none:
+  /// the transform is the state of that cycle the iteration budget ends on.
+  int cycle_period = 0;
   std::size_t matched_count = 0;  ///< data points the last search paired (before rejectors)
   std::size_t inlier_count = 0;   ///< pairs kept by the rejectors in the last iteration
   std::size_t data_count = 0;     ///< finite data points
@@ -299,6 +316,10 @@ class BasicIcp {
     if (model_neighbors != nullptr) last_model_.assign(data_.size(), no_cache);
     const std::size_t stride = params.coarse_points > 0 ? data_.size() / params.coarse_points : 1;
     bool coarse = stride > 1;
+    // The transforms x_k (x_k before iteration k) since the first full iteration with every
+    // rejector settled, x_k in recent[k % size]: the states a limit cycle repeats.
+    std::array<transform_type, max_cycle_period + 1> recent;
+    int recorded_from = -1;  // the first k recorded; -1 = none
 
     for (int it = 0; it < params.max_iterations; ++it) {
       ctx.iteration = it;
@@ -326,6 +347,7 @@ class BasicIcp {
         result.reason = IcpTermination::degenerate;
         break;
       }
+      const transform_type previous = transform;
       const transform_type delta = transform.inverse(Eigen::Isometry) * *next;
       transform = *next;
       const bool small = delta.translation().norm() <= params.translation_epsilon &&
@@ -341,6 +363,28 @@ class BasicIcp {
         result.reason = IcpTermination::converged;
         result.converged = true;
         break;
+      }
+      if (params.skip_cycles && settled && !coarse_now) {
+        constexpr int size = max_cycle_period + 1;
+        if (recorded_from < 0) {
+          recorded_from = it;
+          recent[static_cast<std::size_t>(it % size)] = previous;
+        }
+        const int k = it + 1;  // transform is x_k
+        const int last = params.max_iterations - 1;
+        int period = 0;
+        for (int p = 1; p <= max_cycle_period && k - p >= recorded_from && period == 0; ++p)
+          if (recent[static_cast<std::size_t>((k - p) % size)].matrix() == transform.matrix())
+            period = p;
+        recent[static_cast<std::size_t>(k % size)] = transform;
+        if (period > 0 && k < last) {
+          // x_last = x_j with j = k - period + ((last - (k - period)) mod period): run iteration
+          // `last` from it, as the budget would have.
+          const int j = k - period + (last - k + period) % period;
+          transform = recent[static_cast<std::size_t>(j % size)];
+          result.cycle_period = period;
+          it = last - 1;
+        }
       }
     }
 
@@ -624,6 +668,10 @@ class BasicIcp {
   /// Steps of the walk through model_neighbors before match() falls back to a search: each costs
   /// one list's distances (k), a search about ten times as much.
   static constexpr int max_hops = 4;
+
+  /// Longest limit cycle IcpParams::skip_cycles looks for (the map registrations of a laser log
+  /// show periods 2 to 8, most of them 2); a longer one runs out the budget as before.
+  static constexpr int max_cycle_period = 8;
 
   /// Data points per block of the parallel search (a constant: see the file comment).
   static constexpr std::size_t match_block = 128;
