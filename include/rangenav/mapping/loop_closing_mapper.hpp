@@ -85,8 +85,13 @@ struct LoopClosureParams {
   Scalar min_window_linear = Scalar(0.5);
   /// Upper bound of the linear half-window (m), see min_window_linear.
   Scalar max_window_linear = Scalar(10);
-  /// Lower bound of the angular half-window (rad).
-  Scalar min_window_angular = Scalar(5) * std::numbers::pi_v<Scalar> / 180;
+  /// Lower bound of the angular half-window (rad). The drift model is an average: in one stretch
+  /// of turns on the spot the front end can lose several degrees more (11° on a freiburg-079
+  /// run, docs/benchmarks.md), and a window narrower than the heading error never finds the
+  /// place again. 15° covers that; Cartographer's constraint builder searches ±30° around
+  /// every prediction. Wide windows cost branch and bound little (its bounds prune the
+  /// rotations far from the scan's).
+  Scalar min_window_angular = Scalar(15) * std::numbers::pi_v<Scalar> / 180;
   /// A submap is a candidate when one of its key frames lies within the window plus this of the
   /// key frame (m): from a few metres away indoors a scan sees most of what the submap saw.
   Scalar overlap_distance = Scalar(2);
