@@ -89,8 +89,8 @@ struct LoopClosureParams {
   /// of turns on the spot the front end can lose several degrees more (11° on a freiburg-079
   /// run, docs/benchmarks.md), and a window narrower than the heading error never finds the
   /// place again. 15° covers that; Cartographer's constraint builder searches ±30° around
-  /// every prediction. Wide windows cost branch and bound little (its bounds prune the
-  /// rotations far from the scan's).
+  /// every prediction. The wider floor costs a few per cent more matcher work where it applies
+  /// (docs/mapping.md).
   Scalar min_window_angular = Scalar(15) * std::numbers::pi_v<Scalar> / 180;
   /// A submap is a candidate when one of its key frames lies within the window plus this of the
   /// key frame (m): from a few metres away indoors a scan sees most of what the submap saw.
