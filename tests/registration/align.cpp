@@ -214,8 +214,11 @@ TEST_CASE("1 and 2 threads give the same transform bit for bit", "[registration]
   // the threads run serially and the test holds trivially.
   INFO("OpenMP enabled: " << parallel_enabled);
   std::mt19937 rng(9);
-  auto [target, sample] = two_samples<3>(rng);
+  // Large enough for several blocks of every reduction and a kd-tree cut into parts.
+  auto [target, sample] = two_samples<3>(rng, 800);
   REQUIRE(target.size() > 4 * detail::reduction_block);
+  REQUIRE(sample.size() > 4 * detail::closed_form_block);
+  REQUIRE(target.size() >= 2 * KdTree<3, double>::part_size);
   const Transform3d truth = random_motion<3>(rng, 0.2, 0.1);
   auto source = test::transformed<3>(sample, truth.inverse(Eigen::Isometry));
   test::add_noise<3>(source, 0.01, rng);

@@ -85,7 +85,8 @@ void check_against_brute_force(const Search& search, const BruteForceSearch<D, S
 template <int D, class S>
 void static_tree_case() {
   std::mt19937 rng(42 + D);
-  for (std::size_t n : {1u, 7u, 100u, 3000u}) {
+  // 5000 and 20000 points are cut into 2 and 8 parts (KdTree::part_size).
+  for (std::size_t n : {1u, 7u, 100u, 3000u, 5000u, 20000u}) {
     const auto pts = random_points<D, S>(n, rng, S(10));
     const KdTree<D, S> tree(pts);
     const BruteForceSearch<D, S> brute(pts);
@@ -128,6 +129,47 @@ TEST_CASE("KdTree matches brute force in 2D and 3D, float and double", "[search]
   static_tree_case<2, float>();
   static_tree_case<3, double>();
   static_tree_case<3, float>();
+}
+
+TEST_CASE("KdTree built on several threads answers as on one, ties across its cuts included",
+          "[search]") {
+  // Points on an integer grid, many of them twice: the median planes pass through points, and
+  // equal coordinates and equal distances fall on both sides of a cut.
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> cell(-12, 12);
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < 9000; ++i) {
+    const Eigen::Vector3d p(double(cell(rng)), double(cell(rng)), 0.25 * cell(rng));
+    pts.push_back(p);
+    if (i % 3 == 0) pts.push_back(p);
+  }
+  REQUIRE(pts.size() >= 4 * KdTree<3, double>::part_size);
+  KdTreeParams two;
+  two.num_threads = 2;
+  const KdTree<3, double> serial(pts), parallel(pts, two);
+  const BruteForceSearch<3, double> brute(pts);
+  check_against_brute_force(serial, brute, rng, 12.0);
+  std::vector<Neighbor<double>> a, b;
+  std::uniform_real_distribution<double> u(-13.0, 13.0);
+  for (int i = 0; i < 300; ++i) {
+    // Queries on grid points and planes as well as between them.
+    const Eigen::Vector3d q = i % 2 == 0
+                                  ? Eigen::Vector3d(double(cell(rng)), double(cell(rng)), u(rng))
+                                  : Eigen::Vector3d(u(rng), u(rng), u(rng));
+    REQUIRE(serial.knn(q, 9, a) == parallel.knn(q, 9, b));
+    for (std::size_t j = 0; j < a.size(); ++j) {
+      CHECK(a[j].index == b[j].index);
+      CHECK(a[j].distance_sq == b[j].distance_sq);
+    }
+    const auto n1 = serial.nearest(q), n2 = parallel.nearest(q);
+    REQUIRE(n1.has_value());
+    REQUIRE(n2.has_value());
+    CHECK(n1->index == n2->index);
+  }
+  KdTreeParams none;
+  none.num_threads = 0;
+  CHECK_THROWS_WITH((KdTree<3, double>(pts, none)),
+                    "rangenav: KdTree: argument 'num_threads' = 0 must be >= 1");
 }
 
 TEST_CASE("GrowingKdTree matches brute force while growing", "[search]") {

@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
+#include <vector>
 
 #include "rangenav/core/error.hpp"
 
@@ -66,6 +67,23 @@ void for_each_block(std::size_t n, std::size_t block, int num_threads, F&& f) {
 #endif
   for (std::size_t b = 0; b < blocks; ++b)
     run(b, 0);
+}
+
+/// The sum over [0, n) of f(begin, end), a partial sum of one block of `block` items, on up to
+/// num_threads threads: the blocks' partial sums are added in block order (T has +=), so the
+/// result does not depend on the thread count. A single block is f(0, n) itself.
+template <class T, class F>
+[[nodiscard]] T sum_blocks(std::size_t n, std::size_t block, int num_threads, F&& f) {
+  const std::size_t blocks = block_count(n, block);
+  if (blocks <= 1) return f(std::size_t(0), n);
+  std::vector<T> partial(blocks);
+  for_each_block(
+      n, block, num_threads,
+      [&](std::size_t b, std::size_t begin, std::size_t end, int) { partial[b] = f(begin, end); });
+  T total = partial[0];
+  for (std::size_t b = 1; b < blocks; ++b)
+    total += partial[b];
+  return total;
 }
 
 }  // namespace detail

@@ -163,12 +163,15 @@ IcpResult<traits::dimension_v<Target>, traits::scalar_t<Target>> align_impl(
   // The target's tree (correspondences, normals, covariances) and, for GICP, the source's
   // (its covariances): both at once on two threads.
   const bool gicp = settings.method == RegistrationMethod::gicp;
+  // (A tree alone builds its parts on the threads; nested in the two-tree loop it runs serially.)
   std::optional<KdTree<D, Scalar>> trees[2];
+  KdTreeParams tree_params;
+  tree_params.num_threads = threads;
   for_each_block(gicp ? 2 : 1, 1, threads, [&](std::size_t b, std::size_t, std::size_t, int) {
     if (b == 0)
-      trees[0].emplace(std::move(target_points));
+      trees[0].emplace(std::move(target_points), tree_params);
     else
-      trees[1].emplace(source_points);
+      trees[1].emplace(source_points, tree_params);
   });
   const KdTree<D, Scalar>& tree = *trees[0];
   switch (settings.method) {

@@ -102,9 +102,12 @@ Linearization<D, Scalar> linearize_pairs(std::span<const Correspondence<D, Scala
   scratch.assign(block_count(pairs.size(), reduction_block), Linearization<D, Scalar>{});
   for_each_block(pairs.size(), reduction_block, num_threads,
                  [&](std::size_t b, std::size_t begin, std::size_t end, int) {
-                   Linearization<D, Scalar>& lin = scratch[b];
+                   // Summed locally and stored once: neighbouring blocks' sums share cache
+                   // lines, and two threads adding into them would contend at every pair.
+                   Linearization<D, Scalar> lin;
                    for (std::size_t i = begin; i < end; ++i)
                      if (residual(pairs[i], lin.equations)) lin.points.add(pairs[i].data);
+                   scratch[b] = lin;
                  });
   Linearization<D, Scalar> total;
   for (const auto& lin : scratch)

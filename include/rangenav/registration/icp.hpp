@@ -43,6 +43,7 @@
 #include <string_view>
 #include <tuple>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "rangenav/core/error.hpp"
@@ -424,11 +425,10 @@ class BasicIcp {
     }
     const Scalar bound = std::sqrt(bound_sq);
     const std::size_t count = (data_.size() + stride - 1) / stride;
-    if (slots_.size() < count) {
-      slots_.resize(count);
-      found_.resize(count);
-    }
-    searches_.assign(detail::block_count(count, match_block), 0);
+    if (slots_.size() < count) slots_.resize(count);
+    const std::size_t blocks = detail::block_count(count, match_block);
+    searches_.assign(blocks, 0);
+    block_pairs_.assign(blocks, 0);
     knn_.resize(static_cast<std::size_t>(params.num_threads));
     // The model point nearest to p among `indices`, by the kd-tree's metric (squared distance
     // summed per axis in order, so a proven pair carries the distance a search reports).
@@ -443,10 +443,10 @@ class BasicIcp {
       }
       return best;
     };
-    // Data point j (slot k) pairs with model point nb.
-    const auto pair_with = [&](std::size_t k, std::size_t j, const Neighbor<Scalar>& nb) {
-      slots_[k] = {data_[j], model.point(nb.index), nb.distance_sq, data_index_[j], nb.index};
-      found_[k] = 1;
+    // Data point j pairs with model point nb: the pair goes to the next free slot of its block
+    // (a block's pairs are packed at its start, in data order).
+    const auto pair_with = [&](std::size_t& slot, std::size_t j, const Neighbor<Scalar>& nb) {
+      slots_[slot++] = {data_[j], model.point(nb.index), nb.distance_sq, data_index_[j], nb.index};
       if (model_neighbors != nullptr) last_model_[j] = nb.index;
     };
     // Rounding of the distances compared in a proof below.
@@ -459,9 +459,9 @@ class BasicIcp {
         [&](std::size_t b, std::size_t begin, std::size_t end, int thread) {
           std::vector<Neighbor<Scalar>>& knn = knn_[static_cast<std::size_t>(thread)];
           std::size_t searches = 0;
+          std::size_t slot = begin;
           for (std::size_t k = begin; k < end; ++k) {
             const std::size_t j = k * stride;
-            found_[k] = 0;
             const point_type p = t(data_[j]);
             bool admitted = true;
             std::apply([&](const auto&... r) { ((admitted = admitted && admits(r, ctx, p)), ...); },
@@ -481,7 +481,7 @@ class BasicIcp {
                 const Scalar lever = (p - model.point(m)).norm();
                 proven = std::isinf(others) ||
                          std::sqrt(best.distance_sq) < others - lever - margin(p, others);
-                if (proven && best.distance_sq < bound_sq) pair_with(k, j, best);
+                if (proven && best.distance_sq < bound_sq) pair_with(slot, j, best);
                 if (best.index == m) break;  // no nearer neighbour to walk to
                 m = best.index;
                 last_model_[j] = m;
@@ -490,7 +490,7 @@ class BasicIcp {
             }
             if (!reuse) {
               ++searches;
-              if (const auto nb = model.nearest(p, bound_sq)) pair_with(k, j, *nb);
+              if (const auto nb = model.nearest(p, bound_sq)) pair_with(slot, j, *nb);
               continue;
             }
             // Reuse of the last search of this data point, made at `query`, which found the
@@ -509,7 +509,7 @@ class BasicIcp {
                     p,
                     std::span<const std::uint32_t>(candidates_).subspan(j * candidates, c.count));
                 if (std::sqrt(best.distance_sq) < reach) {
-                  if (best.distance_sq < bound_sq) pair_with(k, j, best);
+                  if (best.distance_sq < bound_sq) pair_with(slot, j, best);
                   continue;
                 }
               }
@@ -522,13 +522,25 @@ class BasicIcp {
             c.others = knn.size() == candidates ? std::sqrt(knn.back().distance_sq) : bound;
             for (std::size_t q = 0; q < knn.size(); ++q)
               candidates_[j * candidates + q] = knn[q].index;
-            if (!knn.empty()) pair_with(k, j, knn[0]);
+            if (!knn.empty()) pair_with(slot, j, knn[0]);
           }
           searches_[b] = searches;
+          block_pairs_[b] = slot - begin;
         });
-    pairs_.clear();
-    for (std::size_t k = 0; k < count; ++k)
-      if (found_[k] != 0) pairs_.push_back(slots_[k]);
+    // The blocks' pairs, in block order: each block copies its own to its offset.
+    std::size_t total = 0;
+    for (std::size_t& n : block_pairs_)
+      total += std::exchange(n, total);
+    pairs_.resize(total);
+    detail::for_each_block(
+        count, match_block, params.num_threads,
+        [&](std::size_t b, std::size_t begin, std::size_t, int) {
+          const std::size_t first = block_pairs_[b];
+          const std::size_t last = b + 1 < blocks ? block_pairs_[b + 1] : total;
+          std::copy(slots_.begin() + static_cast<std::ptrdiff_t>(begin),
+                    slots_.begin() + static_cast<std::ptrdiff_t>(begin + (last - first)),
+                    pairs_.begin() + static_cast<std::ptrdiff_t>(first));
+        });
     std::size_t searches = 0;
     for (const std::size_t s : searches_)
       searches += s;
@@ -682,9 +694,9 @@ class BasicIcp {
   std::vector<std::uint32_t> candidates_;  ///< reuse_candidates model indices per data point
   std::vector<std::uint32_t> last_model_;  ///< model_neighbors: each data point's last nearest
   std::vector<correspondence_type> pairs_;
-  std::vector<correspondence_type> slots_;          ///< the pair of each searched data point
-  std::vector<std::uint8_t> found_;                 ///< whether slots_[k] holds a pair
-  std::vector<std::size_t> searches_;               ///< searches per block
+  std::vector<correspondence_type> slots_;  ///< the pair of each searched data point
+  std::vector<std::size_t> block_pairs_;    ///< pairs per block, then each block's first pair
+  std::vector<std::size_t> searches_;       ///< searches per block
   std::vector<std::vector<Neighbor<Scalar>>> knn_;  ///< one k-NN buffer per thread
   std::vector<point_type> normals_;                 ///< degeneracy check: normal per pair
   std::vector<detail::Linearization<D, Scalar>> degeneracy_scratch_;

@@ -21,6 +21,7 @@
 #include <tuple>
 #include <vector>
 
+#include "rangenav/core/parallel.hpp"
 #include "rangenav/core/robust_kernel.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/registration/correspondence.hpp"
@@ -36,57 +37,74 @@ namespace detail {
 struct UnitWeights {};
 inline constexpr UnitWeights unit_weights{};
 
+/// Pairs per block of the sums below (on several threads, blocks are summed in order): a 2D
+/// scan's pairs (a few hundred) are one block, summed exactly as serially.
+inline constexpr std::size_t closed_form_block = 1024;
+
+/// Sums over the pairs of the closed form, blocked (sum_blocks) over up to num_threads threads.
+template <class T, class Scalar, int D, class F>
+[[nodiscard]] T sum_pairs(std::span<const Correspondence<D, Scalar>> pairs, int num_threads,
+                          F&& f) {
+  return sum_blocks<T>(pairs.size(), closed_form_block, num_threads,
+                       [&](std::size_t begin, std::size_t end) {
+                         T sum = T::Zero();
+                         for (std::size_t i = begin; i < end; ++i)
+                           f(i, sum);
+                         return sum;
+                       });
+}
+
 /// Weighted centroids of the model and data points and the weight sum n (the pair count for
 /// unit weights); nullopt when n is not positive.
 template <int D, class Scalar, class Weight>
 [[nodiscard]] std::optional<std::tuple<Point<D, Scalar>, Point<D, Scalar>, Scalar>>
-weighted_centroids(std::span<const Correspondence<D, Scalar>> pairs, const Weight& weight) {
+weighted_centroids(std::span<const Correspondence<D, Scalar>> pairs, const Weight& weight,
+                   int num_threads) {
   constexpr bool unit = std::is_same_v<Weight, UnitWeights>;
-  Scalar n = 0;
-  Point<D, Scalar> cm = Point<D, Scalar>::Zero(), cd = Point<D, Scalar>::Zero();
-  for (std::size_t i = 0; i < pairs.size(); ++i) {
+  // [c_m sum, c_d sum, n]
+  using Sums = Eigen::Matrix<Scalar, 2 * D + 1, 1>;
+  const Sums sums = sum_pairs<Sums>(pairs, num_threads, [&](std::size_t i, Sums& s) {
     if constexpr (unit) {
-      cm += pairs[i].model;
-      cd += pairs[i].data;
+      s.template head<D>() += pairs[i].model;
+      s.template segment<D>(D) += pairs[i].data;
     } else {
       const Scalar w = weight(i);
-      cm += w * pairs[i].model;
-      cd += w * pairs[i].data;
-      n += w;
+      s.template head<D>() += w * pairs[i].model;
+      s.template segment<D>(D) += w * pairs[i].data;
+      s[2 * D] += w;
     }
-  }
-  if constexpr (unit) n = static_cast<Scalar>(pairs.size());
+  });
+  const Scalar n = unit ? static_cast<Scalar>(pairs.size()) : sums[2 * D];
   if (!(n > Scalar(0))) return std::nullopt;
-  return std::tuple{Point<D, Scalar>(cm / n), Point<D, Scalar>(cd / n), n};
+  return std::tuple{Point<D, Scalar>(sums.template head<D>() / n),
+                    Point<D, Scalar>(sums.template segment<D>(D) / n), n};
 }
 
 template <class Scalar, class Weight>
 [[nodiscard]] std::optional<Transform<2, Scalar>> point_to_point_closed_form(
-    std::span<const Correspondence<2, Scalar>> pairs, const Weight& weight) {
+    std::span<const Correspondence<2, Scalar>> pairs, const Weight& weight, int num_threads) {
   constexpr bool unit = std::is_same_v<Weight, UnitWeights>;
-  const auto w_of = [&](std::size_t i) {
-    if constexpr (unit)
-      return Scalar(1);
-    else
-      return weight(i);
-  };
-  const auto centroids = weighted_centroids<2, Scalar>(pairs, weight);
+  const auto centroids = weighted_centroids<2, Scalar>(pairs, weight, num_threads);
   if (!centroids) return std::nullopt;
-  const auto& [cm, cd, n] = *centroids;
-  Scalar sin_sum = 0, cos_sum = 0, spread_sq = 0;
-  for (std::size_t i = 0; i < pairs.size(); ++i) {
+  // Named copies: clang 14 does not let a lambda capture a structured binding.
+  const Point<2, Scalar> cm = std::get<0>(*centroids), cd = std::get<1>(*centroids);
+  const Scalar n = std::get<2>(*centroids);
+  // [sin sum, cos sum, spread^2]
+  using Sums = Eigen::Matrix<Scalar, 3, 1>;
+  const Sums sums = sum_pairs<Sums>(pairs, num_threads, [&](std::size_t i, Sums& s) {
     const Point<2, Scalar> m = pairs[i].model - cm, d = pairs[i].data - cd;
     if constexpr (unit) {
-      sin_sum += m.y() * d.x() - m.x() * d.y();
-      cos_sum += m.x() * d.x() + m.y() * d.y();
-      spread_sq += d.squaredNorm();
+      s[0] += m.y() * d.x() - m.x() * d.y();
+      s[1] += m.x() * d.x() + m.y() * d.y();
+      s[2] += d.squaredNorm();
     } else {
-      const Scalar w = w_of(i);
-      sin_sum += w * (m.y() * d.x() - m.x() * d.y());
-      cos_sum += w * (m.x() * d.x() + m.y() * d.y());
-      spread_sq += w * d.squaredNorm();
+      const Scalar w = weight(i);
+      s[0] += w * (m.y() * d.x() - m.x() * d.y());
+      s[1] += w * (m.x() * d.x() + m.y() * d.y());
+      s[2] += w * d.squaredNorm();
     }
-  }
+  });
+  const Scalar sin_sum = sums[0], cos_sum = sums[1], spread_sq = sums[2];
   // All data points identical: the rotation is undetermined.
   if (!(spread_sq > n * std::numeric_limits<Scalar>::epsilon() * (Scalar(1) + cd.squaredNorm())))
     return std::nullopt;
@@ -102,24 +120,28 @@ template <class Scalar, class Weight>
 /// H = sum w d' m'^T (the diagonal term corrects a reflection); t = c_m - R c_d.
 template <class Scalar, class Weight>
 [[nodiscard]] std::optional<Transform<3, Scalar>> point_to_point_closed_form(
-    std::span<const Correspondence<3, Scalar>> pairs, const Weight& weight) {
+    std::span<const Correspondence<3, Scalar>> pairs, const Weight& weight, int num_threads) {
   constexpr bool unit = std::is_same_v<Weight, UnitWeights>;
-  const auto centroids = weighted_centroids<3, Scalar>(pairs, weight);
+  const auto centroids = weighted_centroids<3, Scalar>(pairs, weight, num_threads);
   if (!centroids) return std::nullopt;
-  const auto& [cm, cd, n] = *centroids;
-  Eigen::Matrix<Scalar, 3, 3> h = Eigen::Matrix<Scalar, 3, 3>::Zero();
-  Eigen::Matrix<Scalar, 3, 3> data_cov = Eigen::Matrix<Scalar, 3, 3>::Zero();
-  for (std::size_t i = 0; i < pairs.size(); ++i) {
+  // Named copies: clang 14 does not let a lambda capture a structured binding.
+  const Point<3, Scalar> cm = std::get<0>(*centroids), cd = std::get<1>(*centroids);
+  const Scalar n = std::get<2>(*centroids);
+  // [H | data covariance]
+  using Sums = Eigen::Matrix<Scalar, 3, 6>;
+  const Sums sums = sum_pairs<Sums>(pairs, num_threads, [&](std::size_t i, Sums& s) {
     const Point<3, Scalar> d = pairs[i].data - cd;
     if constexpr (unit) {
-      h.noalias() += d * (pairs[i].model - cm).transpose();
-      data_cov.noalias() += d * d.transpose();
+      s.template leftCols<3>().noalias() += d * (pairs[i].model - cm).transpose();
+      s.template rightCols<3>().noalias() += d * d.transpose();
     } else {
       const Point<3, Scalar> wd = weight(i) * d;
-      h.noalias() += wd * (pairs[i].model - cm).transpose();
-      data_cov.noalias() += wd * d.transpose();
+      s.template leftCols<3>().noalias() += wd * (pairs[i].model - cm).transpose();
+      s.template rightCols<3>().noalias() += wd * d.transpose();
     }
-  }
+  });
+  const Eigen::Matrix<Scalar, 3, 3> h = sums.template leftCols<3>();
+  const Eigen::Matrix<Scalar, 3, 3> data_cov = sums.template rightCols<3>();
   // Identical or collinear data points leave a rotation undetermined (second singular value
   // of the data spread ~ 0).
   const Eigen::JacobiSVD<Eigen::Matrix<Scalar, 3, 3>> spread(data_cov);
@@ -157,7 +179,7 @@ struct PointToPointSolver {
   [[nodiscard]] std::optional<Transform<D, Scalar>> solve(
       std::span<const Correspondence<D, Scalar>> pairs) const {
     if (pairs.size() < min_pairs) return std::nullopt;
-    return detail::point_to_point_closed_form<Scalar>(pairs, detail::unit_weights);
+    return detail::point_to_point_closed_form<Scalar>(pairs, detail::unit_weights, 1);
   }
 
   /// The next transform of an ICP iteration (see the file comment).
@@ -166,12 +188,15 @@ struct PointToPointSolver {
     if (pairs.size() < min_pairs) return std::nullopt;
     std::optional<Transform<D, Scalar>> t;
     if (kernel.type == RobustKernelType::none) {
-      t = detail::point_to_point_closed_form<Scalar>(pairs, detail::unit_weights);
+      t = detail::point_to_point_closed_form<Scalar>(pairs, detail::unit_weights, ctx.num_threads);
     } else {
       const detail::AffineApply<D, Scalar> apply(ctx.current);
-      t = detail::point_to_point_closed_form<Scalar>(pairs, [&](std::size_t i) {
-        return kernel.weight((pairs[i].model - apply(pairs[i].data)).squaredNorm());
-      });
+      t = detail::point_to_point_closed_form<Scalar>(
+          pairs,
+          [&](std::size_t i) {
+            return kernel.weight((pairs[i].model - apply(pairs[i].data)).squaredNorm());
+          },
+          ctx.num_threads);
     }
     if (!t || ctx.prior == nullptr) return t;
     return detail::gauss_newton<D, Scalar>(pairs, *t, ctx, gauss_newton_steps, step_epsilon,

@@ -16,6 +16,7 @@
 
 #include <nanoflann.hpp>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -24,6 +25,7 @@
 #include <vector>
 
 #include "rangenav/core/error.hpp"
+#include "rangenav/core/parallel.hpp"
 #include "rangenav/core/point_cloud.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/search/nearest_neighbor_search.hpp"
@@ -35,6 +37,9 @@ struct KdTreeParams {
   /// Maximum number of points in a leaf (nanoflann's leaf_max_size): smaller leaves mean faster
   /// queries and slower builds. 10 is nanoflann's default.
   std::size_t leaf_max_size = 10;
+  /// Threads that build a KdTree (see KdTree: a large cloud is cut into parts built at once).
+  /// The tree, and so every query's answer, does not depend on it. Default 1.
+  int num_threads = 1;
 };
 
 namespace detail {
@@ -97,6 +102,19 @@ class RangeTree {
   std::unique_ptr<Index> index_;
 };
 
+/// Collector decorator that maps a part's local indices through a permutation (KdTree's parts).
+template <class Inner>
+struct PermutedCollector {
+  Inner& inner;
+  const std::uint32_t* index;  ///< index[local] is the stored point's index
+  [[nodiscard]] auto worstDist() const { return inner.worstDist(); }
+  template <class Scalar>
+  bool addPoint(Scalar distance_sq, std::uint32_t local) {
+    return inner.addPoint(distance_sq, index[local]);
+  }
+  [[nodiscard]] bool full() const { return inner.full(); }
+};
+
 /// Collector decorator that shifts a tree's local indices by its offset.
 template <class Inner>
 struct OffsetCollector {
@@ -134,6 +152,13 @@ void append_finite(const C& cloud, std::vector<Point<D, Scalar>>& points,
 }  // namespace detail
 
 /// A static kd-tree over the finite points of a cloud. Models NearestNeighborSearch.
+///
+/// A cloud of at least 2 * part_size points is cut into 2, 4 or 8 parts by median planes (the
+/// top levels of a kd-tree, along the widest extent), and each part gets its own nanoflann tree,
+/// so that KdTreeParams::num_threads threads build the parts at once (nanoflann builds one tree
+/// on one thread). A query descends the planes nearest side first and visits the other side only
+/// when the plane is nearer than the answer so far, as inside a single tree. The parts hold a
+/// reordered copy of the points; the cut depends on the point count only, never on the threads.
 template <int D, class Scalar = double>
 class KdTree {
  public:
@@ -141,6 +166,10 @@ class KdTree {
   static constexpr int dimension = D;   ///< 2 or 3
   using scalar_type = Scalar;           ///< coordinate type
   using point_type = Point<D, Scalar>;  ///< a stored point
+  /// Least points of a part: a smaller cloud is one nanoflann tree.
+  static constexpr std::size_t part_size = 2048;
+  /// Most parts.
+  static constexpr std::size_t max_parts = 8;
 
   KdTree() = default;
 
@@ -182,7 +211,7 @@ class KdTree {
   [[nodiscard]] std::optional<Neighbor<Scalar>> nearest(
       const point_type& q, Scalar max_distance_sq = unbounded_sq<Scalar>) const {
     detail::NearestCollector<Scalar> c(max_distance_sq);
-    if (tree_) tree_->search(c, q);
+    search(c, q);
     return c.result();
   }
 
@@ -193,7 +222,7 @@ class KdTree {
     if (out.size() != k) out.resize(k);  // (a call GCC does not inline: skipped when sized)
     if (k == 0) return 0;
     detail::KnnCollector<Scalar> c(out.data(), k, max_distance_sq);
-    if (tree_) tree_->search(c, q);
+    search(c, q);
     if (c.size() != k) out.resize(c.size());
     return out.size();
   }
@@ -204,23 +233,107 @@ class KdTree {
                      bool sorted = true) const {
     out.clear();
     detail::RadiusCollector<Scalar> c(out, radius_sq);
-    if (tree_) tree_->search(c, q);
+    search(c, q);
     if (sorted) detail::sort_by_distance(out);
     return out.size();
   }
 
  private:
+  /// A median plane of the top levels: points with x[axis] < value lie on the first side,
+  /// > value on the second, = value on either.
+  struct Cut {
+    int axis = 0;
+    Scalar value = 0;
+  };
+
   void build() {
-    if (points_.empty()) return;
-    tree_ =
-        std::make_unique<detail::RangeTree<D, Scalar>>(points_.data(), 0, points_.size(), params_);
+    detail::require_threads("KdTree", params_.num_threads);
+    const std::size_t n = points_.size();
+    if (n == 0) return;
+    std::size_t parts = 1;
+    while (parts < max_parts && n >= 2 * parts * part_size)
+      parts *= 2;
+    if (parts == 1) {
+      tree_ = std::make_unique<detail::RangeTree<D, Scalar>>(points_.data(), 0, n, params_);
+      return;
+    }
+    // The cuts in heap order (node c has children 2c + 1, 2c + 2; the parts are the leaves
+    // parts - 1 ...): each halves its node's points at the median of the widest axis.
+    order_.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      order_[i] = static_cast<std::uint32_t>(i);
+    cuts_.assign(parts - 1, Cut{});
+    std::vector<std::size_t> first(2 * parts - 1), last(2 * parts - 1);
+    first[0] = 0;
+    last[0] = n;
+    for (std::size_t c = 0; c + 1 < parts; ++c) {
+      const auto begin = order_.begin() + static_cast<std::ptrdiff_t>(first[c]);
+      const auto end = order_.begin() + static_cast<std::ptrdiff_t>(last[c]);
+      point_type lo = points_[*begin], hi = lo;
+      for (auto it = begin; it != end; ++it) {
+        lo = lo.cwiseMin(points_[*it]);
+        hi = hi.cwiseMax(points_[*it]);
+      }
+      int axis = 0;
+      (hi - lo).maxCoeff(&axis);
+      const auto mid = begin + (end - begin) / 2;
+      std::nth_element(begin, mid, end, [&](std::uint32_t a, std::uint32_t b) {
+        return points_[a][axis] < points_[b][axis];
+      });
+      cuts_[c] = {axis, points_[*mid][axis]};
+      const std::size_t m = static_cast<std::size_t>(mid - order_.begin());
+      first[2 * c + 1] = first[c];
+      last[2 * c + 1] = m;
+      first[2 * c + 2] = m;
+      last[2 * c + 2] = last[c];
+    }
+    part_points_.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      part_points_[i] = points_[order_[i]];
+    parts_.resize(parts);
+    detail::for_each_block(
+        parts, 1, params_.num_threads, [&](std::size_t p, std::size_t, std::size_t, int) {
+          const std::size_t leaf = parts - 1 + p;
+          parts_[p] = std::make_unique<detail::RangeTree<D, Scalar>>(
+              part_points_.data(), first[leaf], last[leaf] - first[leaf], params_);
+        });
+  }
+
+  template <class Collector>
+  void search(Collector& c, const point_type& q) const {
+    if (tree_)
+      tree_->search(c, q);
+    else if (!parts_.empty())
+      search_node(c, q, 0);
+  }
+
+  /// The parts under heap node `node`, nearest side first.
+  template <class Collector>
+  void search_node(Collector& c, const point_type& q, std::size_t node) const {
+    if (node >= cuts_.size()) {
+      const auto& part = *parts_[node - cuts_.size()];
+      detail::PermutedCollector<Collector> mapped{c, order_.data() + part.offset()};
+      part.search(mapped, q);
+      return;
+    }
+    const Cut& cut = cuts_[node];
+    const Scalar diff = q[cut.axis] - cut.value;
+    const std::size_t near = diff < Scalar(0) ? 2 * node + 1 : 2 * node + 2;
+    search_node(c, q, near);
+    // Every point beyond the plane is at least |diff| away.
+    if (diff * diff < c.worstDist()) search_node(c, q, near == 2 * node + 1 ? near + 1 : near - 1);
   }
 
   std::vector<point_type> points_;
   std::vector<std::uint32_t> source_;
   bool has_gaps_ = false;
   KdTreeParams params_{};
-  std::unique_ptr<detail::RangeTree<D, Scalar>> tree_;
+  std::unique_ptr<detail::RangeTree<D, Scalar>> tree_;  ///< a cloud of one part
+  // A cloud of several parts:
+  std::vector<Cut> cuts_;                ///< the top levels, in heap order
+  std::vector<std::uint32_t> order_;     ///< part_points_[i] is points_[order_[i]]
+  std::vector<point_type> part_points_;  ///< the points, each part contiguous
+  std::vector<std::unique_ptr<detail::RangeTree<D, Scalar>>> parts_;  ///< by leaf
 };
 
 /// A kd-tree that points are appended to, with amortised O(log n) rebuilds per point (see the
