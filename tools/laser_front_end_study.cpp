@@ -10,7 +10,8 @@
 //
 //   --log, --relations       default: carmen/mit-csail.clf.gz and
 //                            slam-benchmark/mit-csail.relations in the shared data folder
-//   --gauss-newton-steps N   the point-to-line solver's steps per ICP iteration (default: its own)
+//   --gauss-newton-steps N   the point-to-line solver's steps per ICP iteration (default:
+//                            laser_slam_params()'s solver_gauss_newton_steps, 10)
 //   --odometry-jitter M      instead of the neighbourhood: laser_slam_params() N times (default
 //                            16), the odometry's x and y moved by up to ±M metres (uniform, seed =
 //                            run; run 0 as logged). Millimetres are far below the odometry's own
@@ -111,9 +112,9 @@ int main(int argc, char** argv) {
   const auto run = [&](const char* name, const std::function<void(Params&)>& change,
                        unsigned seed) {
     Params params = rangenav::laser_slam_params<double>();
+    if (steps) params.solver_gauss_newton_steps = *steps;
     change(params);
     rangenav::LaserSlamMapper<double> mapper(params);
-    if (steps) mapper.icp.solver.gauss_newton_steps = *steps;
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> offset(-jitter, jitter);
     std::vector<double> stamps;

@@ -545,4 +545,17 @@ TEST_CASE("The laser setup's map registration uses a weakly observed direction",
   CHECK_THROWS_WITH(LaserSlamMapper<double>(bad),
                     "rangenav: IncrementalMapperParams: argument 'solver_degeneracy_ratio' = 1 "
                     "must be in [0, 1)");
+
+  // The Gauss-Newton steps of the laser setup reach the map ICP's solver; unset keeps its own.
+  REQUIRE(params.solver_gauss_newton_steps == 10);
+  CHECK(LaserSlamMapper<double>(params).icp.solver.gauss_newton_steps == 10);
+  auto own = params;
+  own.solver_gauss_newton_steps.reset();
+  CHECK(LaserSlamMapper<double>(own).icp.solver.gauss_newton_steps ==
+        PointToLineSolver<double>{}.gauss_newton_steps);
+  bad = params;
+  bad.solver_gauss_newton_steps = 0;
+  CHECK_THROWS_WITH(LaserSlamMapper<double>(bad),
+                    "rangenav: IncrementalMapperParams: argument 'solver_gauss_newton_steps' = 0 "
+                    "must be >= 1");
 }
