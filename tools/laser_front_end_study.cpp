@@ -3,15 +3,20 @@
 // settings moved one step either way, and scores every run against the Freiburg relations. The
 // front end's error over the long relations is a drift that a small change anywhere moves by
 // tenths of a metre, so one configuration's figure says little: compare the spread (mean and
-// median over the neighbourhood) when judging a change of the registration.
+// median over the neighbourhood) when judging a change of the registration. With --slam the runs
+// are of the whole loop-closing SLAM (LaserSlam: submaps, loop closure, pose graph) instead,
+// scored on its optimised trajectory: its single figure moves by a few millimetres with any change
+// that alters one loop decision, so judge a change of it by the spread too.
 //
-//   laser_front_end_study [--log LOG] [--relations FILE] [--gauss-newton-steps N]
+//   laser_front_end_study [--log LOG] [--relations FILE] [--gauss-newton-steps N] [--slam]
 //                         [--odometry-jitter M [--runs N]]
 //
 //   --log, --relations       default: carmen/mit-csail.clf.gz and
 //                            slam-benchmark/mit-csail.relations in the shared data folder
 //   --gauss-newton-steps N   the point-to-line solver's steps per ICP iteration (default:
 //                            laser_slam_params()'s solver_gauss_newton_steps, 10)
+//   --slam                   LaserSlam with loop closure (LoopClosureParams' defaults) over the
+//                            same front-end settings, instead of LaserSlamMapper
 //   --odometry-jitter M      instead of the neighbourhood: laser_slam_params() N times (default
 //                            16), the odometry's x and y moved by up to ±M metres (uniform, seed =
 //                            run; run 0 as logged). Millimetres are far below the odometry's own
@@ -19,7 +24,8 @@
 //                            registration that lands on either side of a gate), not of the input.
 //
 // Prints one line per run (mean translational error of all, short and long relations) and,
-// last, one JSON line with the mean and median over all relations.
+// last, one JSON line with the mean and median over the runs of the all-relations error and of
+// the long-relations error.
 
 #include <algorithm>
 #include <cstdio>
@@ -37,10 +43,27 @@
 #include "rangenav/io/carmen.hpp"
 #include "rangenav/io/slam_relations.hpp"
 #include "rangenav/mapping/incremental_mapper.hpp"
+#include "rangenav/mapping/loop_closing_mapper.hpp"
 
 namespace {
 
 using Params = rangenav::IncrementalMapperParams<double>;
+
+struct Errors {
+  double all, long_gap;
+};
+
+double mean_of(const std::vector<double>& v) {
+  double sum = 0;
+  for (const double a : v)
+    sum += a;
+  return sum / static_cast<double>(v.size());
+}
+
+double median_of(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
 
 struct Setting {
   const char* name;
@@ -75,6 +98,7 @@ int main(int argc, char** argv) {
   std::filesystem::path log_path = data / "carmen/mit-csail.clf.gz";
   std::filesystem::path relations_path = data / "slam-benchmark/mit-csail.relations";
   std::optional<int> steps;
+  bool slam = false;
   double jitter = 0;
   int runs = 16;
   for (int i = 1; i < argc; ++i) {
@@ -85,6 +109,8 @@ int main(int argc, char** argv) {
       relations_path = argv[++i];
     } else if (arg == "--gauss-newton-steps" && i + 1 < argc) {
       steps = std::atoi(argv[++i]);
+    } else if (arg == "--slam") {
+      slam = true;
     } else if (arg == "--odometry-jitter" && i + 1 < argc) {
       jitter = std::atof(argv[++i]);
     } else if (arg == "--runs" && i + 1 < argc) {
@@ -92,7 +118,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: laser_front_end_study [--log LOG] [--relations FILE] "
-                   "[--gauss-newton-steps N] [--odometry-jitter M [--runs N]]\n");
+                   "[--gauss-newton-steps N] [--slam] [--odometry-jitter M [--runs N]]\n");
       return 2;
     }
   }
@@ -108,13 +134,14 @@ int main(int argc, char** argv) {
   const auto relations = rangenav::io::read_slam_relations(relations_path);
 
   // One run of the front end: the settings changed by `change`, the odometry jittered with `seed`
-  // (0: as logged); prints the errors and returns the mean over all relations.
+  // (0: as logged); prints the errors and returns the means over all and over the long relations.
   const auto run = [&](const char* name, const std::function<void(Params&)>& change,
                        unsigned seed) {
     Params params = rangenav::laser_slam_params<double>();
     if (steps) params.solver_gauss_newton_steps = *steps;
     change(params);
     rangenav::LaserSlamMapper<double> mapper(params);
+    rangenav::LaserSlam<double> full(params, rangenav::LoopClosureParams<double>{});
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> offset(-jitter, jitter);
     std::vector<double> stamps;
@@ -130,33 +157,42 @@ int main(int argc, char** argv) {
         odometry = pose.to_isometry();
       }
       stamps.push_back(laser.timestamp);
-      poses.push_back(rangenav::Pose2d::from_isometry(mapper.process(laser.scan, odometry).pose));
+      if (slam)
+        full.process(laser.scan, odometry);
+      else
+        poses.push_back(rangenav::Pose2d::from_isometry(mapper.process(laser.scan, odometry).pose));
+    }
+    if (slam) {
+      full.finish();
+      for (const auto& pose : full.trajectory())
+        poses.push_back(rangenav::Pose2d::from_isometry(pose));
     }
     const auto e = rangenav::io::evaluate_slam_relations(relations, stamps, poses);
     std::printf("%-22s all %.4f m  short %.4f m  long %.4f m\n", name, e.all.translation_mean,
                 e.short_gap.translation_mean, e.long_gap.translation_mean);
     std::fflush(stdout);
-    return e.all.translation_mean;
+    return Errors{e.all.translation_mean, e.long_gap.translation_mean};
   };
 
-  std::vector<double> all;
+  std::vector<double> all, long_gap;
+  const auto add = [&](const Errors& e) {
+    all.push_back(e.all);
+    long_gap.push_back(e.long_gap);
+  };
   if (jitter > 0) {
     for (int r = 0; r < runs; ++r) {
       const std::string name = "run " + std::to_string(r);
-      all.push_back(run(
+      add(run(
           name.c_str(), [](Params&) {}, static_cast<unsigned>(r)));
     }
   } else {
     for (const auto& [name, change] : neighbourhood())
-      all.push_back(run(name, change, 0));
+      add(run(name, change, 0));
   }
-  double mean = 0;
-  for (const double a : all)
-    mean += a;
-  mean /= static_cast<double>(all.size());
-  std::vector<double> sorted = all;
-  std::sort(sorted.begin(), sorted.end());
-  std::printf("{\"runs\":%zu,\"first_m\":%.4f,\"mean_m\":%.4f,\"median_m\":%.4f}\n", all.size(),
-              all.front(), mean, sorted[sorted.size() / 2]);
+  std::printf(
+      "{\"runs\":%zu,\"first_m\":%.4f,\"mean_m\":%.4f,\"median_m\":%.4f,\"long_mean_m\":%.4f,"
+      "\"long_median_m\":%.4f}\n",
+      all.size(), all.front(), mean_of(all), median_of(all), mean_of(long_gap),
+      median_of(long_gap));
   return 0;
 }
