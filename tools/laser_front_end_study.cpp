@@ -140,8 +140,13 @@ int main(int argc, char** argv) {
     Params params = rangenav::laser_slam_params<double>();
     if (steps) params.solver_gauss_newton_steps = *steps;
     change(params);
-    rangenav::LaserSlamMapper<double> mapper(params);
-    rangenav::LaserSlam<double> full(params, rangenav::LoopClosureParams<double>{});
+    // Only the mapper the run uses is built.
+    std::optional<rangenav::LaserSlamMapper<double>> mapper;
+    std::optional<rangenav::LaserSlam<double>> full;
+    if (slam)
+      full.emplace(params, rangenav::LoopClosureParams<double>{});
+    else
+      mapper.emplace(params);
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> offset(-jitter, jitter);
     std::vector<double> stamps;
@@ -157,14 +162,15 @@ int main(int argc, char** argv) {
         odometry = pose.to_isometry();
       }
       stamps.push_back(laser.timestamp);
-      if (slam)
-        full.process(laser.scan, odometry);
+      if (full)
+        full->process(laser.scan, odometry);
       else
-        poses.push_back(rangenav::Pose2d::from_isometry(mapper.process(laser.scan, odometry).pose));
+        poses.push_back(
+            rangenav::Pose2d::from_isometry(mapper->process(laser.scan, odometry).pose));
     }
-    if (slam) {
-      full.finish();
-      for (const auto& pose : full.trajectory())
+    if (full) {
+      full->finish();
+      for (const auto& pose : full->trajectory())
         poses.push_back(rangenav::Pose2d::from_isometry(pose));
     }
     const auto e = rangenav::io::evaluate_slam_relations(relations, stamps, poses);
