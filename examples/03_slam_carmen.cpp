@@ -145,7 +145,7 @@ int main(int argc, char** argv) try {
   const auto nodes = slam.key_frame_poses();
   for (const auto& c : slam.loop_closures())
     svg.layer("loop edges")
-        .segment(nodes[c.anchor].translation(), nodes[c.node].translation(),
+        .segment(nodes[c.from].translation(), nodes[c.node].translation(),
                  {.stroke = "royalblue", .stroke_width_px = 0.8});
   std::string truth_json;
   if (!in.truth.empty()) {  // simulated input: the true path and the absolute trajectory error

@@ -309,10 +309,9 @@ TEST_CASE("LoopClosingMapper accepts no loop at a look-alike place", "[mapping][
   CHECK(slam.loop_statistics().candidates > 0);
   for (const auto& c : slam.loop_closures()) {
     const Transform2d true_relative =
-        rangenav::relative(truth[scan_of_node[c.anchor]], truth[scan_of_node[c.node]])
-            .to_isometry();
+        rangenav::relative(truth[scan_of_node[c.from]], truth[scan_of_node[c.node]]).to_isometry();
     const Transform2d error = true_relative.inverse(Eigen::Isometry) * c.relative;
-    INFO("loop " << c.anchor << " -> " << c.node);
+    INFO("loop " << c.from << " -> " << c.node);
     CHECK(error.translation().norm() < 0.3);
     CHECK(std::abs(rangenav::rotation_angle(error)) < 0.05);
   }

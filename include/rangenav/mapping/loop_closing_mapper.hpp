@@ -27,12 +27,15 @@
 //                the result gated by the window's χ²;
 //   acceptance   the ICP converged, is not degenerate, pairs at least `min_fitness` of the scan
 //                and stays within a cell and an angular step of the matcher's pose;
-//   back end     the accepted loop edge (anchor -> key frame, the ICP's information) enters the
-//                pose graph with a Cauchy kernel whose scale is the χ² quantile of an inlier, so
-//                a wrong closure that passed verification is down-weighted instead of bending
-//                the map; the graph is optimised when a new loop edge disagrees with the
-//                estimate, and the submaps, the trajectory and the front end's local map are
-//                re-anchored to the optimised poses.
+//   back end     the accepted loop edge enters the pose graph from the submap's key frame
+//                nearest the match (its pose in the submap as built) to the key frame, with the
+//                ICP's information widened by the submap's drift relative to that key frame (the
+//                chain from the anchor stays the graph's to bend; an edge from the anchor would
+//                repeat that drift in every loop edge into the submap), and a Cauchy kernel whose
+//                scale is the χ² quantile of an inlier, so a wrong closure that passed verification
+//                is down-weighted instead of bending the map; the graph is optimised when a new
+//                loop edge disagrees with the estimate, and the submaps, the trajectory and the
+//                front end's local map are re-anchored to the optimised poses.
 //
 // Every scan's pose is kept relative to the key frame before it, so trajectory() returns the
 // whole trajectory re-anchored to the optimised key frames. Nothing depends on timestamps.
@@ -147,16 +150,17 @@ struct LoopClosureParams {
   }
 };
 
-/// A loop closure: the pose of key frame `node` in the frame of submap `submap`'s anchor node.
+/// A loop closure: the pose of key frame `node` in the frame of key frame `from`, the key frame
+/// of submap `submap` nearest the matched pose.
 template <int D, class Scalar = double>
 struct LoopClosure {
   /// Index of the matched submap.
   std::size_t submap = 0;
-  std::size_t anchor = 0;                                            ///< the submap's anchor node
+  std::size_t from = 0;                                              ///< the submap's key frame
   std::size_t node = 0;                                              ///< the key frame's node
-  Transform<D, Scalar> relative = Transform<D, Scalar>::Identity();  ///< anchor -> node
+  Transform<D, Scalar> relative = Transform<D, Scalar>::Identity();  ///< from -> node
   /// Information of `relative` (body-frame perturbation, pose_uncertainty.hpp): the refining
-  /// ICP's, widened by the submap's own internal drift.
+  /// ICP's, widened by the submap's drift relative to `from`.
   lie::PoseMatrix<D, Scalar> information = lie::PoseMatrix<D, Scalar>::Identity();
   Scalar score = 0;    ///< correlative score (2D), 0 in 3D
   Scalar fitness = 0;  ///< the refining ICP's
@@ -304,13 +308,15 @@ class LoopClosingMapper {
     transform_type pose;
     std::vector<point_type> points;  ///< the key frame's scan (robot frame)
     std::size_t submap = 0;
+    /// The chain edge from the key frame before: its step and covariance (in this frame).
+    transform_type step = transform_type::Identity();
+    lie::PoseMatrix<D, Scalar> step_covariance = lie::PoseMatrix<D, Scalar>::Zero();
   };
   struct Submap {
     std::size_t anchor = 0, first = 0, count = 0;
     std::unique_ptr<map_type> map;  ///< set when finished (anchor frame)
-    /// Covariance of the submap's last key frame relative to its anchor (the chain's steps
-    /// propagated): how far the submap's own points may be off in the anchor's frame.
-    lie::PoseMatrix<D, Scalar> internal = lie::PoseMatrix<D, Scalar>::Zero();
+    /// The key frames' poses in the anchor's frame when the map was built (a loop edge's start).
+    std::vector<transform_type> frames;
     /// Where a key frame last failed to close a loop with this submap (map frame).
     std::optional<point_type> failed_at;
     std::unique_ptr<CorrelativeScanMatcher<Scalar>> matcher;  ///< built on first use (2D)
@@ -359,14 +365,9 @@ class LoopClosingMapper {
       const lie::PoseMatrix<D, Scalar> cov =
           registration + loops_.front_end_drift.template covariance<D>(step);
       graph_.add_edge(k - 1, k, step, information_from_covariance<D, Scalar>(cov));
-      // Σ_k = Ad(step⁻¹) Σ_{k-1} Ad(step⁻¹)ᵀ + Σ_step (the random walk in k's frame).
-      const lie::PoseMatrix<D, Scalar> ad =
-          lie::se_adjoint<D, Scalar>(step.inverse(Eigen::Isometry));
-      accumulated_ = ad * accumulated_ * ad.transpose() + cov;
-      if (submaps_[submap].anchor != k) {
-        auto& internal = submaps_[submap].internal;
-        internal = ad * internal * ad.transpose() + cov;
-      }
+      nodes_[k].step = step;
+      nodes_[k].step_covariance = cov;
+      accumulated_ = propagate(accumulated_, step, cov);
     }
     if (restart) {
       front_end_.clear_map();
@@ -384,8 +385,11 @@ class LoopClosingMapper {
     params.normals = true;
     s.map = std::make_unique<map_type>(params);
     const transform_type to_anchor = nodes_[s.anchor].pose.inverse(Eigen::Isometry);
-    for (std::size_t k = s.first; k < s.first + s.count; ++k)
-      s.map->insert(nodes_[k].points, to_anchor * nodes_[k].pose);
+    s.frames.clear();
+    for (std::size_t k = s.first; k < s.first + s.count; ++k) {
+      s.frames.push_back(to_anchor * nodes_[k].pose);
+      s.map->insert(nodes_[k].points, s.frames.back());
+    }
     if (!track) return;
     restarted_ = false;
     rebuild_local_map();
@@ -533,14 +537,51 @@ class LoopClosingMapper {
         return std::nullopt;
       }
     }
+    // The edge starts at the submap's key frame nearest the matched pose, measured from that key
+    // frame's pose in the submap as built: the chain between the anchor and it stays the graph's
+    // to bend, instead of every loop edge into the submap repeating its drift with a lever arm.
+    std::size_t from = 0;
+    const point_type at = r.transform.translation();
+    for (std::size_t j = 1; j < s.frames.size(); ++j)
+      if ((s.frames[j].translation() - at).squaredNorm() <
+          (s.frames[from].translation() - at).squaredNorm())
+        from = j;
     closure.submap = submap;
-    closure.anchor = s.anchor;
+    closure.from = s.first + from;
     closure.node = k;
-    closure.relative = r.transform;
-    // The submap's points are off in its anchor's frame by up to its own internal drift.
-    closure.information = covariance_of(covariance_of(info) + s.internal);
+    closure.relative = s.frames[from].inverse(Eigen::Isometry) * r.transform;
+    // The submap's points are off relative to that key frame by up to its drift to either end.
+    closure.information = covariance_of(covariance_of(info) + drift_within(s, s.first + from));
     closure.fitness = r.fitness;
     return closure;
+  }
+
+  // Σ' = Ad(u⁻¹) Σ Ad(u⁻¹)ᵀ + Σ_u: the covariance Σ of a pose relative to a fixed frame carried
+  // one step u (covariance Σ_u) further, both in the end frame (the random walk of the chain).
+  static lie::PoseMatrix<D, Scalar> propagate(const lie::PoseMatrix<D, Scalar>& sigma,
+                                              const transform_type& u,
+                                              const lie::PoseMatrix<D, Scalar>& sigma_u) {
+    const lie::PoseMatrix<D, Scalar> ad = lie::se_adjoint<D, Scalar>(u.inverse(Eigen::Isometry));
+    return ad * sigma * ad.transpose() + sigma_u;
+  }
+
+  // How far the submap's points may be off relative to its key frame j: the chain's steps
+  // propagated from j to either end of the submap (the larger translational spread of the two).
+  // Backwards, the step k-1 -> k is u⁻¹ with covariance Ad(u) Σ_u Ad(u)ᵀ in k-1's frame.
+  lie::PoseMatrix<D, Scalar> drift_within(const Submap& s, std::size_t j) const {
+    lie::PoseMatrix<D, Scalar> forward = lie::PoseMatrix<D, Scalar>::Zero();
+    for (std::size_t k = j + 1; k < s.first + s.count; ++k)
+      forward = propagate(forward, nodes_[k].step, nodes_[k].step_covariance);
+    lie::PoseMatrix<D, Scalar> backward = lie::PoseMatrix<D, Scalar>::Zero();
+    for (std::size_t k = j; k > s.first; --k) {
+      const lie::PoseMatrix<D, Scalar> ad = lie::se_adjoint<D, Scalar>(nodes_[k].step);
+      backward = propagate(backward, nodes_[k].step.inverse(Eigen::Isometry),
+                           ad * nodes_[k].step_covariance * ad.transpose());
+    }
+    return forward.template topLeftCorner<D, D>().trace() >=
+                   backward.template topLeftCorner<D, D>().trace()
+               ? forward
+               : backward;
   }
 
   lie::PoseMatrix<D, Scalar> loop_information(const map_type& map, const transform_type& t) {
@@ -562,7 +603,7 @@ class LoopClosingMapper {
   // Adds the loop edge with its Cauchy kernel; returns its χ² at the current estimate.
   Scalar add_loop_edge(const LoopClosure<D, Scalar>& c) {
     const auto edge =
-        graph_.add_edge(c.anchor, c.node, c.relative,
+        graph_.add_edge(c.from, c.node, c.relative,
                         information_from_covariance<D, Scalar>(covariance_of(c.information)),
                         RobustKernel<Scalar>::cauchy(std::sqrt(inlier_chi2())));
     return graph_.edge_chi2(edge);
