@@ -20,6 +20,12 @@
 // (or `min_score`). The precomputed grids come from the one below by a 2 × 2 max of offset
 // 2^(h-1), exact and O(cells) per level.
 //
+// Cells hold the likelihood in 16-bit fixed point (value × 65535, rounded), as Cartographer's
+// precomputation grids hold theirs in 8 bits: rounding is monotone, so the max of Eq. (14) and
+// the bound of Eq. (15) stay exact on the stored values, a score is off by at most 1/131070 per
+// point, the grids take half the memory of floats, and the bounds are exact integer sums (the
+// same whatever the order of summation).
+//
 // The grid is two-dimensional only: 3D loop closures are verified by ICP alone.
 
 #include <algorithm>
@@ -118,7 +124,7 @@ class CorrelativeScanMatcher {
     stride_ = width_ + pad_;
     const std::size_t cells =
         static_cast<std::size_t>(stride_) * static_cast<std::size_t>(height_ + pad_);
-    grids_.assign(static_cast<std::size_t>(params_.levels), std::vector<float>(cells, 0.0f));
+    grids_.assign(static_cast<std::size_t>(params_.levels), std::vector<Cell16>(cells, 0));
     // Level 0: the likelihood of the nearest model point, splatted over 3σ around each point.
     auto& base = grids_[0];
     const Scalar inv_two_sigma_sq = Scalar(1) / (2 * params_.sigma * params_.sigma);
@@ -130,9 +136,8 @@ class CorrelativeScanMatcher {
         for (int x = cx - reach; x <= cx + reach; ++x) {
           const Scalar dx = origin_.x() + (Scalar(x) + Scalar(0.5)) * r - p.x();
           const Scalar dy = origin_.y() + (Scalar(y) + Scalar(0.5)) * r - p.y();
-          float& cell = base[index(x, y)];
-          cell =
-              std::max(cell, static_cast<float>(std::exp(-(dx * dx + dy * dy) * inv_two_sigma_sq)));
+          Cell16& cell = base[index(x, y)];
+          cell = std::max(cell, quantize(std::exp(-(dx * dx + dy * dy) * inv_two_sigma_sq)));
         }
     }
     // Eq. (14) level by level: the max over [x, x + 2^h) is that of [x, x + s) and [x + s,
@@ -143,7 +148,7 @@ class CorrelativeScanMatcher {
       auto& level = grids_[static_cast<std::size_t>(h)];
       for (int y = -pad_; y < height_; ++y)
         for (int x = -pad_; x < width_; ++x) {
-          float m = below[index(x, y)];
+          Cell16 m = below[index(x, y)];
           if (x + s < width_) m = std::max(m, below[index(x + s, y)]);
           if (y + s < height_) {
             m = std::max(m, below[index(x, y + s)]);
@@ -195,20 +200,28 @@ class CorrelativeScanMatcher {
 
   /// The likelihood (level 0) at a point of the model frame; 0 outside the grid.
   [[nodiscard]] Scalar likelihood(const point_type& p) const {
-    return value(0, static_cast<int>(std::floor((p.x() - origin_.x()) / params_.resolution)),
-                 static_cast<int>(std::floor((p.y() - origin_.y()) / params_.resolution)));
+    return Scalar(value(0, static_cast<int>(std::floor((p.x() - origin_.x()) / params_.resolution)),
+                        static_cast<int>(std::floor((p.y() - origin_.y()) / params_.resolution)))) /
+           Scalar(cell_max);
   }
   /// The parameters the matcher was built with.
   [[nodiscard]] const CorrelativeScanMatcherParams<Scalar>& params() const { return params_; }
   /// Bytes held by the grids.
   [[nodiscard]] std::size_t memory_bytes() const {
-    return grids_.size() * (grids_.empty() ? 0 : grids_[0].size() * sizeof(float));
+    return grids_.size() * (grids_.empty() ? 0 : grids_[0].size() * sizeof(Cell16));
   }
 
  private:
+  using Cell16 = std::uint16_t;  ///< a likelihood in fixed point, 65535 = 1
+  using Sum = std::uint64_t;     ///< a sum of cells (never overflows)
+  static constexpr Cell16 cell_max = std::numeric_limits<Cell16>::max();
+  static Cell16 quantize(Scalar likelihood) {
+    return static_cast<Cell16>(
+        std::lround(std::clamp(likelihood, Scalar(0), Scalar(1)) * cell_max));
+  }
   struct Candidate {
     int angle, x, y;  ///< angle index, cell offsets
-    float score;      ///< summed bound (the score at height 0)
+    Sum score;        ///< summed bound (the score at height 0)
   };
   struct Cell {
     int x, y;
@@ -219,8 +232,8 @@ class CorrelativeScanMatcher {
     return static_cast<std::size_t>(y + pad_) * static_cast<std::size_t>(stride_) +
            static_cast<std::size_t>(x + pad_);
   }
-  [[nodiscard]] float value(int level, int x, int y) const {
-    if (x < -pad_ || y < -pad_ || x >= width_ || y >= height_) return 0.0f;
+  [[nodiscard]] Cell16 value(int level, int x, int y) const {
+    if (x < -pad_ || y < -pad_ || x >= width_ || y >= height_) return 0;
     return grids_[static_cast<std::size_t>(level)][index(x, y)];
   }
 
@@ -303,24 +316,26 @@ class CorrelativeScanMatcher {
       exclusion_->center.translation() = (exclusion_->center.translation() - t0_) / r;
       exclusion_->radius /= r;
     }
-    Candidate best{0, 0, 0, static_cast<float>(min_score * n)};
+    // The least sum that does not beat min_score: a leaf must exceed it, as before.
+    const Scalar threshold = std::clamp(min_score, Scalar(0), Scalar(1)) * n * Scalar(cell_max);
+    Candidate best{0, 0, 0, static_cast<Sum>(std::floor(threshold))};
     bool found = false;
     search(roots_, params_.levels - 1, wx_, best, found);
     if (!found) return std::nullopt;
     CorrelativeMatch<Scalar> m;
     const Scalar theta = theta0_ + Scalar(best.angle - angles_) * step_;
     m.pose = make_transform2(t0_.x() + Scalar(best.x) * r, t0_.y() + Scalar(best.y) * r, theta);
-    m.score = static_cast<Scalar>(best.score) / n;
+    m.score = static_cast<Scalar>(best.score) / (n * Scalar(cell_max));
     m.points = points_.size();
     return m;
   }
 
   // Eq. (15): the summed precomputed grid of height h at the scan's cells shifted by (x, y).
-  [[nodiscard]] float score(int h, int angle, int x, int y) const {
+  [[nodiscard]] Sum score(int h, int angle, int x, int y) const {
     const auto a = static_cast<std::size_t>(angle);
-    const float* grid = grids_[static_cast<std::size_t>(h)].data();
+    const Cell16* grid = grids_[static_cast<std::size_t>(h)].data();
     const std::ptrdiff_t shift = static_cast<std::ptrdiff_t>(y) * stride_ + x;
-    float sum = 0;
+    Sum sum = 0;
     for (std::size_t k = inside_begin_[a]; k < inside_begin_[a + 1]; ++k)
       sum += grid[inside_[k] + shift];
     for (std::size_t k = border_begin_[a]; k < border_begin_[a + 1]; ++k)
@@ -328,16 +343,16 @@ class CorrelativeScanMatcher {
     return sum;
   }
   // score() of the four children of the node at (x, y) (offsets 0 and s per axis, in the order
-  // 2 dx + dy) in one pass over the scan's cells, which dominates the search: the bounds are the
-  // same bits as four score() calls (each sum runs over the cells in the same order).
-  [[nodiscard]] std::array<float, 4> score_children(int h, int angle, int x, int y, int s) const {
+  // 2 dx + dy) in one pass over the scan's cells, which dominates the search: the same sums as
+  // four score() calls.
+  [[nodiscard]] std::array<Sum, 4> score_children(int h, int angle, int x, int y, int s) const {
     const auto a = static_cast<std::size_t>(angle);
-    const float* grid = grids_[static_cast<std::size_t>(h)].data();
+    const Cell16* grid = grids_[static_cast<std::size_t>(h)].data();
     const std::ptrdiff_t shift = static_cast<std::ptrdiff_t>(y) * stride_ + x;
     const std::ptrdiff_t sx = s, sy = static_cast<std::ptrdiff_t>(s) * stride_;
-    std::array<float, 4> sum{};
+    std::array<Sum, 4> sum{};
     for (std::size_t k = inside_begin_[a]; k < inside_begin_[a + 1]; ++k) {
-      const float* g = grid + inside_[k] + shift;
+      const Cell16* g = grid + inside_[k] + shift;
       sum[0] += g[0];
       sum[1] += g[sy];
       sum[2] += g[sx];
@@ -368,11 +383,11 @@ class CorrelativeScanMatcher {
       return;
     }
     const int s = 1 << (h - 1);
-    // Children beyond the window stay at -inf and sort last (the loop stops before them).
+    // Children beyond the window stay at 0 and sort last (best.score >= 0 stops the loop first).
     std::array<Candidate, 4> children;
-    children.fill({c.angle, c.x, c.y, -std::numeric_limits<float>::infinity()});
+    children.fill({c.angle, c.x, c.y, 0});
     if (c.x + s <= w && c.y + s <= w) {
-      const std::array<float, 4> scores = score_children(h - 1, c.angle, c.x, c.y, s);
+      const std::array<Sum, 4> scores = score_children(h - 1, c.angle, c.x, c.y, s);
       for (int i = 0; i < 4; ++i)
         children[static_cast<std::size_t>(i)] = {c.angle, c.x + (i >> 1) * s, c.y + (i & 1) * s,
                                                  scores[static_cast<std::size_t>(i)]};
@@ -425,7 +440,7 @@ class CorrelativeScanMatcher {
   CorrelativeScanMatcherParams<Scalar> params_;
   point_type origin_;  ///< model-frame corner of cell (0, 0)
   int width_ = 0, height_ = 0, pad_ = 0, stride_ = 0;
-  std::vector<std::vector<float>> grids_;  ///< level h: Eq. (14), cells [-pad, size)
+  std::vector<std::vector<Cell16>> grids_;  ///< level h: Eq. (14), cells [-pad, size)
   mutable std::vector<Keyed> keyed_;
   mutable std::vector<point_type> points_;
   mutable std::vector<Scalar> ranges_;
