@@ -1,15 +1,19 @@
 // Loop-closing SLAM against simulator truth: the correlative matcher (exact branch and bound,
-// ambiguity), the front end's uncertainty, the 2D loop closed with drifting odometry, a
+// ambiguity), the front end's uncertainty, the odometry as witness between registrations that
+// disagree (freiburg-101's corrected poses), the 2D loop closed with drifting odometry, a
 // look-alike place rejected, an all-invalid stretch of scans.
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <random>
 #include <vector>
 
 #include "mapping/slam_scenes.hpp"
+#include "rangenav/io/carmen.hpp"
 #include "rangenav/mapping/incremental_mapper.hpp"
 #include "rangenav/mapping/loop_closing_mapper.hpp"
 #include "rangenav/mapping/pose_uncertainty.hpp"
@@ -17,6 +21,7 @@
 #include "rangenav/registration/point_to_plane_solver.hpp"
 #include "rangenav/search/kd_tree.hpp"
 #include "rangenav/sim/worlds.hpp"
+#include "test_support.hpp"
 
 namespace {
 
@@ -202,6 +207,48 @@ TEST_CASE("LoopClosingMapper closes the ring with drifting odometry", "[mapping]
   CHECK(closed_error < 0.1);
   CHECK(closed_map < 0.05);
   CHECK(closed_error < open_error);
+}
+
+TEST_CASE("The laser front end lets the odometry decide between registrations that disagree",
+          "[mapping][slam]") {
+  // freiburg-101's first 16 scans with their corrected poses (the truth), about 1 m and up to
+  // 37° apart. The odometry is the truth but for a rotation error of ±8° (twice the default
+  // noise model's σ) on the turn into scan 9: from that guess the scan-to-scan ICP slides 0.8 m
+  // along a wall, while the map registration (+8°) or the map registration from the odometry
+  // guess (-8°) lands on the truth, as the odometry's translation says.
+  const auto path =
+      rangenav::test::data_file_or_skip("carmen_corrected/freiburg-101-corrected.log.gz");
+  if (path.empty()) return;
+  const auto lasers = rangenav::io::read_carmen_lasers(path);
+  REQUIRE(lasers.size() > 16);
+  const auto run = [&](double error_deg, bool witness) {
+    auto params = rangenav::laser_slam_params<double>();
+    if (witness) params.odometry_noise = rangenav::OdometryNoise<double>{};
+    rangenav::LaserSlamMapper<double> mapper(params);
+    const Pose2d first = *lasers[0].laser_pose;
+    Pose2d odometry = first;
+    double worst = 0;
+    for (std::size_t i = 0; i < 16; ++i) {
+      if (i > 0) {
+        Pose2d step = rangenav::relative(*lasers[i - 1].laser_pose, *lasers[i].laser_pose);
+        if (i == 9) step.theta += error_deg * std::numbers::pi / 180;
+        odometry = rangenav::compose(odometry, step);
+      }
+      const auto u = mapper.process(lasers[i].scan, odometry.to_isometry());
+      const Transform2d truth = rangenav::relative(first, *lasers[i].laser_pose).to_isometry();
+      worst = std::max(worst, (u.pose.translation() - truth.translation()).norm());
+    }
+    return worst;
+  };
+  // The front end's own drift over these 16 m, with the exact odometry.
+  const double exact = run(0.0, true);
+  CHECK(exact < 0.2);
+  for (const double error_deg : {8.0, -8.0}) {
+    CAPTURE(error_deg);
+    CHECK(run(error_deg, true) < exact + 0.02);
+    // Without a noise model the odometry is no witness: the scan-to-scan result is kept.
+    CHECK(run(error_deg, false) > exact + 0.5);
+  }
 }
 
 TEST_CASE("LoopClosingMapper keeps finite poses through a stretch of all-invalid scans",
