@@ -70,18 +70,29 @@ double map_error(const std::vector<Transform2d>& estimate,
   return sum / static_cast<double>(n);
 }
 
+/// Two scans of the ring corridor in their robot frames: the model from (4, 1), the data from
+/// (5.2, 1.3, 10°), and the true data -> model transform.
+struct ScanPair {
+  std::vector<Point2d> model, data;
+  Transform2d truth;
+};
+ScanPair ring_corridor_pair() {
+  const auto world = rangenav::test::ring_corridor();
+  const rangenav::sim::LaserScanner2D scanner;
+  std::mt19937 rng(3);
+  const Pose2d model_pose{4.0, 1.0, 0.0}, data_pose{5.2, 1.3, 0.17};
+  ScanPair pair;
+  pair.model = points_of(scanner.scan(world, model_pose, rng));
+  pair.data = points_of(scanner.scan(world, data_pose, rng));
+  pair.truth = rangenav::relative(model_pose, data_pose).to_isometry();
+  return pair;
+}
+
 }  // namespace
 
 TEST_CASE("CorrelativeScanMatcher finds the true pose, as the exhaustive search does",
           "[mapping][slam]") {
-  const auto world = rangenav::test::ring_corridor();
-  const rangenav::sim::LaserScanner2D scanner;
-  std::mt19937 rng(3);
-  // Model: a scan from (4, 1); data: a scan from (5.2, 1.3, 10°), both in their robot frames.
-  const Pose2d model_pose{4.0, 1.0, 0.0}, data_pose{5.2, 1.3, 0.17};
-  const auto model = points_of(scanner.scan(world, model_pose, rng));
-  const auto data = points_of(scanner.scan(world, data_pose, rng));
-  const Transform2d truth = rangenav::relative(model_pose, data_pose).to_isometry();
+  const auto [model, data, truth] = ring_corridor_pair();
   // Start 0.7 m and 9° off the truth; search ±1 m, ±15°.
   const Transform2d initial = truth * rangenav::make_transform2(0.5, -0.5, -0.16);
   const rangenav::SearchWindow<double> window{1.0, 0.26};
@@ -119,6 +130,39 @@ TEST_CASE("CorrelativeScanMatcher finds the true pose, as the exhaustive search 
   CHECK(from_near->score == Approx(brute_near->score).epsilon(1e-5));
   CHECK(from_near->score > at_near + 0.05);
   CHECK((truth.inverse(Eigen::Isometry) * from_near->pose).translation().norm() < 0.1);
+}
+
+TEST_CASE("CorrelativeScanMatcher refuses a model too wide for its memory bound and clips windows",
+          "[mapping][slam]") {
+  const auto [model, data, truth] = ring_corridor_pair();
+
+  // One stray point 10^7 m away would ask for 10^16 cells (an int overflow before): refused.
+  auto stray = model;
+  stray.emplace_back(1e7, 0.0);
+  CHECK_THROWS_AS(rangenav::CorrelativeScanMatcher<double>(stray), rangenav::invalid_argument);
+  // The bound is the caller's: the model itself fits 1 GiB, not 1 kB.
+  rangenav::CorrelativeScanMatcherParams<double> small;
+  small.max_memory_bytes = 1024;
+  CHECK_THROWS_AS(rangenav::CorrelativeScanMatcher<double>(model, small),
+                  rangenav::invalid_argument);
+  small.max_memory_bytes = 0;
+  CHECK_THROWS_AS(rangenav::CorrelativeScanMatcher<double>(model, small),
+                  rangenav::invalid_argument);
+
+  // A window of ±1000 km is clipped to the offsets that can reach the grid: the search ends with
+  // the best pose there, which scores at least the ±1 m window's best (it covers that window)
+  // and, the scene being a closed corridor, is the true pose.
+  const rangenav::CorrelativeScanMatcher<double> matcher(model);
+  const Transform2d initial = truth * rangenav::make_transform2(0.5, -0.5, -0.16);
+  const auto local = matcher.match(data, initial, rangenav::SearchWindow<double>{1.0, 0.26}, 0.3);
+  const auto wide = matcher.match(data, initial, rangenav::SearchWindow<double>{1e6, 0.26}, 0.3);
+  REQUIRE(local);
+  REQUIRE(wide);
+  CHECK(wide->score >= local->score - 1e-9);
+  CHECK((truth.inverse(Eigen::Isometry) * wide->pose).translation().norm() < 0.1);
+  // A start 10^12 m away puts the scan off the grid for every offset of the window: no match.
+  CHECK_FALSE(matcher.match(data, rangenav::make_transform2(1e12, 0.0, 0.0),
+                            rangenav::SearchWindow<double>{1e6, 0.26}, 0.0));
 }
 
 TEST_CASE("CorrelativeScanMatcher sees a look-alike place as a second peak", "[mapping][slam]") {

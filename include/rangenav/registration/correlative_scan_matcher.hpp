@@ -60,6 +60,11 @@ struct CorrelativeScanMatcherParams {
   Scalar sigma = Scalar(0.1);
   /// Heights of precomputed grids (Hess et al. use 7: a root node covers 2^6 = 64 cells).
   int levels = 7;
+  /// Most bytes the grids of one matcher may take (all levels): a model spread over a larger
+  /// area than that affords at this resolution is refused with invalid_argument instead of
+  /// exhausting memory. 1 GiB holds about 870 m × 870 m at the default resolution and levels,
+  /// far more than a submap.
+  std::size_t max_memory_bytes = std::size_t(1) << 30;
 
   /// Throws invalid_argument naming the first parameter out of range.
   void validate() const {
@@ -68,6 +73,8 @@ struct CorrelativeScanMatcherParams {
     detail::require_positive(where, "sigma", sigma);
     if (levels < 1 || levels > 16)
       detail::throw_invalid_argument(where, "levels", levels, "must be in [1, 16]");
+    if (max_memory_bytes == 0)
+      detail::throw_invalid_argument(where, "max_memory_bytes", max_memory_bytes, "must be > 0");
   }
 };
 
@@ -101,7 +108,8 @@ class CorrelativeScanMatcher {
   using transform_type = Transform<2, Scalar>;  ///< a pose
 
   /// Rasterises the finite points of `model` (in the model frame). Throws invalid_argument for
-  /// invalid parameters or a model without a finite point.
+  /// invalid parameters, a model without a finite point, or one whose grids would exceed
+  /// params.max_memory_bytes.
   explicit CorrelativeScanMatcher(std::span<const point_type> model,
                                   CorrelativeScanMatcherParams<Scalar> params = {})
       : params_((params.validate(), params)) {
@@ -116,7 +124,21 @@ class CorrelativeScanMatcher {
     if (!(lo_x <= hi_x))
       detail::throw_invalid("CorrelativeScanMatcher", "argument 'model' has no finite point");
     const Scalar r = params_.resolution;
-    const int reach = static_cast<int>(std::ceil(3 * params_.sigma / r));  // 3σ of the kernel
+    const Scalar reach_cells = std::ceil(3 * params_.sigma / r);  // 3σ of the kernel
+    // The grids' size, checked in floating point before any integer conversion.
+    const Scalar pad_cells = Scalar((1 << (params_.levels - 1)) - 1);
+    const Scalar side_x = std::ceil((hi_x - lo_x) / r) + 2 * reach_cells + 4 + pad_cells;
+    const Scalar side_y = std::ceil((hi_y - lo_y) / r) + 2 * reach_cells + 4 + pad_cells;
+    const Scalar bytes =
+        side_x * side_y * Scalar(params_.levels) * Scalar(sizeof(Cell16));  // inf when huge
+    if (!(bytes <= Scalar(params_.max_memory_bytes)))
+      detail::throw_invalid(
+          "CorrelativeScanMatcher",
+          "argument 'model' spans " + detail::format_value(hi_x - lo_x) + " m x " +
+              detail::format_value(hi_y - lo_y) + " m: its grids would take " +
+              detail::format_value(std::ceil(bytes)) + " bytes, more than max_memory_bytes = " +
+              detail::format_value(params_.max_memory_bytes));
+    const int reach = static_cast<int>(reach_cells);
     origin_ = point_type(lo_x - Scalar(reach + 1) * r, lo_y - Scalar(reach + 1) * r);
     width_ = static_cast<int>(std::ceil((hi_x - origin_.x()) / r)) + reach + 2;
     height_ = static_cast<int>(std::ceil((hi_y - origin_.y()) / r)) + reach + 2;
@@ -252,6 +274,7 @@ class CorrelativeScanMatcher {
     ranges_.clear();
     for (const auto& p : points_)
       ranges_.push_back(p.norm());
+    const Scalar d_far = *std::max_element(ranges_.begin(), ranges_.end());
     const auto q = ranges_.begin() + static_cast<std::ptrdiff_t>(ranges_.size() * 9 / 10);
     std::nth_element(ranges_.begin(), q, ranges_.end());
     const Scalar d_max = *q;
@@ -260,9 +283,16 @@ class CorrelativeScanMatcher {
                      Scalar(std::numbers::pi_v<Scalar> / 1800));
     angles_ =
         static_cast<int>(std::ceil(std::min(window.angular, std::numbers::pi_v<Scalar>) / step_));
-    wx_ = static_cast<int>(std::min(std::ceil(window.linear / r), Scalar(1 << 20)));
     theta0_ = std::atan2(initial.linear()(1, 0), initial.linear()(0, 0));
     t0_ = initial.translation();
+    // A scan point lands in cell c + o for an offset o, with |c| <= `near` cells (its distance
+    // from the grid's corner), and scores only inside [-pad, size): offsets beyond `reachable`
+    // put every point off the grid, score 0 and cannot be a match, so a window wider than the
+    // grid is clipped to it (the result is the same; the roots below stay few).
+    const Scalar near =
+        std::ceil(((t0_ - origin_).template lpNorm<Eigen::Infinity>() + d_far) / r) + 1;
+    const Scalar reachable = near + Scalar(std::max(width_, height_) + pad_ + 1);
+    wx_ = static_cast<int>(std::min({std::ceil(window.linear / r), reachable, Scalar(1 << 20)}));
 
     // Per angle, the scan's cells split by what the window's offsets [-w, w] do to them: a cell
     // outside the grid for every offset adds 0 to every bound and is dropped; one inside for
@@ -296,6 +326,7 @@ class CorrelativeScanMatcher {
       inside_begin_[next] = inside_.size();
       border_begin_[next] = border_.size();
     }
+    if (inside_.empty() && border_.empty()) return false;  // the scan never meets the grid
     const int top = params_.levels - 1;
     roots_.clear();
     for (int a = -angles_; a <= angles_; ++a)
