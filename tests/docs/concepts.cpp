@@ -72,15 +72,14 @@ TEST_CASE("concepts: your own point type and cloud container work with the libra
 
 // [snippet:own-search]
 // An exact search over points sorted by x: a query walks outwards from its own x and stops once
-// the gap in x alone exceeds the current bound. Every distance is squared (`*_sq`), every bound
-// strict, and answers go into the caller's buffer.
+// the gap in x alone exceeds the collector's bound. SearchQueries turns this one walk into the
+// concept's nearest(), knn() and radius(). Every distance is squared (`*_sq`), every bound strict.
 template <int D>
-class SortedXSearch {
+class SortedXSearch : public rangenav::SearchQueries<SortedXSearch<D>, D, double> {
  public:
   static constexpr int dimension = D;
   using scalar_type = double;
   using point_type = rangenav::Point<D, double>;
-  using Neighbor = rangenav::Neighbor<double>;
 
   explicit SortedXSearch(std::vector<point_type> points) : points_(std::move(points)) {
     std::sort(points_.begin(), points_.end(),
@@ -89,47 +88,10 @@ class SortedXSearch {
   std::size_t size() const { return points_.size(); }
   const point_type& point(std::size_t i) const { return points_[i]; }
 
-  std::optional<Neighbor> nearest(const point_type& q,
-                                  double max_distance_sq = rangenav::unbounded_sq<double>) const {
-    std::optional<Neighbor> best;
-    walk(
-        q, [&] { return best ? best->distance_sq : max_distance_sq; },
-        [&](std::uint32_t i, double d_sq) {
-          best = Neighbor{i, d_sq};
-        });
-    return best;
-  }
-  std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor>& out,
-                  double max_distance_sq = rangenav::unbounded_sq<double>) const {
-    out.clear();
-    if (k == 0) return 0;
-    walk(
-        q, [&] { return out.size() == k ? out.back().distance_sq : max_distance_sq; },
-        [&](std::uint32_t i, double d_sq) {
-          if (out.size() == k) out.pop_back();
-          const auto at =
-              std::upper_bound(out.begin(), out.end(), d_sq,
-                               [](double d, const Neighbor& n) { return d < n.distance_sq; });
-          out.insert(at, Neighbor{i, d_sq});
-        });
-    return out.size();
-  }
-  std::size_t radius(const point_type& q, double radius_sq, std::vector<Neighbor>& out) const {
-    out.clear();
-    walk(
-        q, [&] { return radius_sq; },
-        [&](std::uint32_t i, double d_sq) {
-          out.push_back({i, d_sq});
-        });
-    std::sort(out.begin(), out.end(),
-              [](const Neighbor& a, const Neighbor& b) { return a.distance_sq < b.distance_sq; });
-    return out.size();
-  }
-
- private:
-  // Calls visit(i, distance_sq) for the points closer than bound_sq(), nearest x first.
-  template <class Bound, class Visit>
-  void walk(const point_type& q, Bound bound_sq, Visit visit) const {
+  // Offers the collector every point that may lie within its bound, c.worstDist(), which shrinks
+  // as it fills (the query's own bound_sq is where it starts), nearest x first.
+  template <class Collector>
+  void collect(Collector& c, const point_type& q, double /*bound_sq*/) const {
     const std::size_t n = points_.size();
     const auto first_not_below =
         std::lower_bound(points_.begin(), points_.end(), q.x(),
@@ -140,11 +102,12 @@ class SortedXSearch {
       const double gap_down = down > 0 ? q.x() - points_[down - 1].x() : INFINITY;
       const std::size_t i = gap_up <= gap_down ? up++ : --down;
       const double gap = std::min(gap_up, gap_down);
-      if (!(gap * gap < bound_sq())) break;  // every point left is farther in x alone
-      const double d_sq = (points_[i] - q).squaredNorm();
-      if (d_sq < bound_sq()) visit(static_cast<std::uint32_t>(i), d_sq);
+      if (!(gap * gap < c.worstDist())) break;  // every point left is farther in x alone
+      c.addPoint((points_[i] - q).squaredNorm(), static_cast<std::uint32_t>(i));
     }
   }
+
+ private:
   std::vector<point_type> points_;
 };
 

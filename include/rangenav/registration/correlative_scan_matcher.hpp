@@ -125,10 +125,10 @@ class CorrelativeScanMatcher {
       detail::throw_invalid("CorrelativeScanMatcher", "argument 'model' has no finite point");
     const Scalar r = params_.resolution;
     const Scalar reach_cells = std::ceil(3 * params_.sigma / r);  // 3σ of the kernel
+    pad_ = (1 << (params_.levels - 1)) - 1;
     // The grids' size, checked in floating point before any integer conversion.
-    const Scalar pad_cells = Scalar((1 << (params_.levels - 1)) - 1);
-    const Scalar side_x = std::ceil((hi_x - lo_x) / r) + 2 * reach_cells + 4 + pad_cells;
-    const Scalar side_y = std::ceil((hi_y - lo_y) / r) + 2 * reach_cells + 4 + pad_cells;
+    const Scalar side_x = std::ceil((hi_x - lo_x) / r) + 2 * reach_cells + 4 + Scalar(pad_);
+    const Scalar side_y = std::ceil((hi_y - lo_y) / r) + 2 * reach_cells + 4 + Scalar(pad_);
     const Scalar bytes =
         side_x * side_y * Scalar(params_.levels) * Scalar(sizeof(Cell16));  // inf when huge
     if (!(bytes <= Scalar(params_.max_memory_bytes)))
@@ -142,7 +142,6 @@ class CorrelativeScanMatcher {
     origin_ = point_type(lo_x - Scalar(reach + 1) * r, lo_y - Scalar(reach + 1) * r);
     width_ = static_cast<int>(std::ceil((hi_x - origin_.x()) / r)) + reach + 2;
     height_ = static_cast<int>(std::ceil((hi_y - origin_.y()) / r)) + reach + 2;
-    pad_ = (1 << (params_.levels - 1)) - 1;
     stride_ = width_ + pad_;
     const std::size_t cells =
         static_cast<std::size_t>(stride_) * static_cast<std::size_t>(height_ + pad_);

@@ -48,7 +48,7 @@ struct GridIndexParams {
 /// A growing uniform-grid index over 2D points (see the file comment). Models
 /// NearestNeighborSearch; indices are stable (insertion order of the finite points).
 template <std::floating_point Scalar = double>
-class GridIndex2 {
+class GridIndex2 : public SearchQueries<GridIndex2<Scalar>, 2, Scalar> {
  public:
   static constexpr int dimension = 2;   ///< always 2
   using scalar_type = Scalar;           ///< coordinate type
@@ -107,39 +107,10 @@ class GridIndex2 {
            heads_.capacity() * sizeof(std::uint32_t) + overflow_.capacity() * sizeof(std::uint32_t);
   }
 
-  /// The closest stored point with distance_sq < max_distance_sq, or nothing when no point is
-  /// that close.
-  [[nodiscard]] std::optional<Neighbor<Scalar>> nearest(
-      const point_type& q, Scalar max_distance_sq = unbounded_sq<Scalar>) const {
-    detail::NearestCollector<Scalar> c(max_distance_sq);
-    search(c, q, max_distance_sq);
-    return c.result();
-  }
-
-  /// Replaces `out` by the (at most) k closest points with distance_sq < max_distance_sq,
-  /// ascending by distance; returns their count.
-  std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
-                  Scalar max_distance_sq = unbounded_sq<Scalar>) const {
-    out.resize(k);
-    if (k == 0) return 0;
-    detail::KnnCollector<Scalar> c(out.data(), k, max_distance_sq);
-    search(c, q, max_distance_sq);
-    out.resize(c.size());
-    return out.size();
-  }
-
-  /// Replaces `out` by every point with distance_sq < radius_sq, ascending by distance (ties by
-  /// index); returns their count.
-  std::size_t radius(const point_type& q, Scalar radius_sq,
-                     std::vector<Neighbor<Scalar>>& out) const {
-    out.clear();
-    detail::RadiusCollector<Scalar> c(out, radius_sq);
-    search(c, q, radius_sq);
-    detail::sort_by_distance(out);
-    return out.size();
-  }
+  // nearest() / knn() / radius(): SearchQueries.
 
  private:
+  friend class SearchQueries<GridIndex2, 2, Scalar>;
   static constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
 
   [[nodiscard]] std::int64_t cell_coord(Scalar v) const {
@@ -215,7 +186,7 @@ class GridIndex2 {
   // r + 1 or beyond is at least r * cell_size away, so the search stops once the collector's
   // bound is below that, or once the rings leave both the bound and the array.
   template <class Collector>
-  void search(Collector& c, const point_type& q, Scalar max_distance_sq) const {
+  void collect(Collector& c, const point_type& q, Scalar max_distance_sq) const {
     for (const std::uint32_t i : overflow_)
       c.addPoint((points_[i] - q).squaredNorm(), i);
     if (nx_ == 0 || !q.allFinite()) return;

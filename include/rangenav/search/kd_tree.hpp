@@ -160,7 +160,7 @@ void append_finite(const C& cloud, std::vector<Point<D, Scalar>>& points,
 /// when the plane is nearer than the answer so far, as inside a single tree. The parts hold a
 /// reordered copy of the points; the cut depends on the point count only, never on the threads.
 template <int D, class Scalar = double>
-class KdTree {
+class KdTree : public SearchQueries<KdTree<D, Scalar>, D, Scalar> {
  public:
   static_assert(D == 2 || D == 3, "KdTree: dimension must be 2 or 3");
   static constexpr int dimension = D;   ///< 2 or 3
@@ -206,39 +206,10 @@ class KdTree {
   /// The index in the input cloud of stored point i.
   [[nodiscard]] std::size_t source_index(std::size_t i) const { return has_gaps_ ? source_[i] : i; }
 
-  /// The closest stored point with distance_sq < max_distance_sq, or nothing when no point is
-  /// that close.
-  [[nodiscard]] std::optional<Neighbor<Scalar>> nearest(
-      const point_type& q, Scalar max_distance_sq = unbounded_sq<Scalar>) const {
-    detail::NearestCollector<Scalar> c(max_distance_sq);
-    search(c, q);
-    return c.result();
-  }
-
-  /// Replaces `out` by the (at most) k closest points with distance_sq < max_distance_sq,
-  /// ascending by distance; returns their count.
-  std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
-                  Scalar max_distance_sq = unbounded_sq<Scalar>) const {
-    if (out.size() != k) out.resize(k);  // (a call GCC does not inline: skipped when sized)
-    if (k == 0) return 0;
-    detail::KnnCollector<Scalar> c(out.data(), k, max_distance_sq);
-    search(c, q);
-    if (c.size() != k) out.resize(c.size());
-    return out.size();
-  }
-
-  /// All points with distance_sq < radius_sq, ascending; with `sorted` false in no particular
-  /// order (cheaper when the order does not matter, e.g. for clustering).
-  std::size_t radius(const point_type& q, Scalar radius_sq, std::vector<Neighbor<Scalar>>& out,
-                     bool sorted = true) const {
-    out.clear();
-    detail::RadiusCollector<Scalar> c(out, radius_sq);
-    search(c, q);
-    if (sorted) detail::sort_by_distance(out);
-    return out.size();
-  }
+  // nearest() / knn() / radius(): SearchQueries.
 
  private:
+  friend class SearchQueries<KdTree, D, Scalar>;
   /// A median plane of the top levels: points with x[axis] < value lie on the first side,
   /// > value on the second, = value on either.
   struct Cut {
@@ -300,7 +271,7 @@ class KdTree {
   }
 
   template <class Collector>
-  void search(Collector& c, const point_type& q) const {
+  void collect(Collector& c, const point_type& q, Scalar) const {
     if (tree_)
       tree_->search(c, q);
     else if (!parts_.empty())
@@ -339,7 +310,7 @@ class KdTree {
 /// A kd-tree that points are appended to, with amortised O(log n) rebuilds per point (see the
 /// file comment). Models NearestNeighborSearch; indices are stable (insertion order).
 template <int D, class Scalar = double>
-class GrowingKdTree {
+class GrowingKdTree : public SearchQueries<GrowingKdTree<D, Scalar>, D, Scalar> {
  public:
   static_assert(D == 2 || D == 3, "GrowingKdTree: dimension must be 2 or 3");
   static constexpr int dimension = D;   ///< 2 or 3
@@ -402,41 +373,12 @@ class GrowingKdTree {
   /// Number of static trees in the chain (at most log2(size) + 1).
   [[nodiscard]] std::size_t tree_count() const { return trees_.size(); }
 
-  /// The closest stored point with distance_sq < max_distance_sq, or nothing when no point is
-  /// that close.
-  [[nodiscard]] std::optional<Neighbor<Scalar>> nearest(
-      const point_type& q, Scalar max_distance_sq = unbounded_sq<Scalar>) const {
-    detail::NearestCollector<Scalar> c(max_distance_sq);
-    search_all(c, q);
-    return c.result();
-  }
-
-  /// Replaces `out` by the (at most) k closest points with distance_sq < max_distance_sq,
-  /// ascending by distance; returns their count.
-  std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
-                  Scalar max_distance_sq = unbounded_sq<Scalar>) const {
-    if (out.size() != k) out.resize(k);  // (a call GCC does not inline: skipped when sized)
-    if (k == 0) return 0;
-    detail::KnnCollector<Scalar> c(out.data(), k, max_distance_sq);
-    search_all(c, q);
-    if (c.size() != k) out.resize(c.size());
-    return out.size();
-  }
-
-  /// All points with distance_sq < radius_sq, ascending; with `sorted` false in no particular
-  /// order (cheaper when the order does not matter).
-  std::size_t radius(const point_type& q, Scalar radius_sq, std::vector<Neighbor<Scalar>>& out,
-                     bool sorted = true) const {
-    out.clear();
-    detail::RadiusCollector<Scalar> c(out, radius_sq);
-    search_all(c, q);
-    if (sorted) detail::sort_by_distance(out);
-    return out.size();
-  }
+  // nearest() / knn() / radius(): SearchQueries.
 
  private:
+  friend class SearchQueries<GrowingKdTree, D, Scalar>;
   template <class Collector>
-  void search_all(Collector& c, const point_type& q) const {
+  void collect(Collector& c, const point_type& q, Scalar) const {
     for (const auto& tree : trees_) {
       detail::OffsetCollector<Collector> shifted{c, static_cast<std::uint32_t>(tree->offset())};
       tree->search(shifted, q);

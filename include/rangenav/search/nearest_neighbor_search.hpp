@@ -141,6 +141,52 @@ void sort_by_distance(std::vector<Neighbor<Scalar>>& out) {
 
 }  // namespace detail
 
+/// The queries of NearestNeighborSearch (nearest, knn, radius), written once for every search
+/// structure of the library over the structure's own collect(c, q, bound_sq), which offers a
+/// result collector (nanoflann's result-set protocol) every stored point that may lie within
+/// bound_sq of q, pruning by the collector's shrinking bound. A structure of one's own gets the
+/// queries the same way (CRTP): `class S : public SearchQueries<S, D, Scalar>`, with this base
+/// a friend of S when collect() is private.
+template <class Derived, int D, class Scalar>
+class SearchQueries {
+ public:
+  /// The closest stored point with distance_sq < max_distance_sq, or nothing when no point is
+  /// that close.
+  [[nodiscard]] std::optional<Neighbor<Scalar>> nearest(
+      const Point<D, Scalar>& q, Scalar max_distance_sq = unbounded_sq<Scalar>) const {
+    detail::NearestCollector<Scalar> c(max_distance_sq);
+    self().collect(c, q, max_distance_sq);
+    return c.result();
+  }
+
+  /// Replaces `out` by the (at most) k closest points with distance_sq < max_distance_sq,
+  /// ascending by distance; returns their count.
+  std::size_t knn(const Point<D, Scalar>& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
+                  Scalar max_distance_sq = unbounded_sq<Scalar>) const {
+    if (out.size() != k) out.resize(k);  // (a call GCC does not inline: skipped when sized)
+    if (k == 0) return 0;
+    detail::KnnCollector<Scalar> c(out.data(), k, max_distance_sq);
+    self().collect(c, q, max_distance_sq);
+    if (c.size() != k) out.resize(c.size());
+    return out.size();
+  }
+
+  /// Replaces `out` by every point with distance_sq < radius_sq, ascending by distance (ties by
+  /// index); with `sorted` false in no particular order (cheaper when the order does not
+  /// matter, e.g. for clustering). Returns their count.
+  std::size_t radius(const Point<D, Scalar>& q, Scalar radius_sq,
+                     std::vector<Neighbor<Scalar>>& out, bool sorted = true) const {
+    out.clear();
+    detail::RadiusCollector<Scalar> c(out, radius_sq);
+    self().collect(c, q, radius_sq);
+    if (sorted) detail::sort_by_distance(out);
+    return out.size();
+  }
+
+ private:
+  [[nodiscard]] const Derived& self() const { return static_cast<const Derived&>(*this); }
+};
+
 /// The k nearest stored points of every stored point of a search structure (itself included),
 /// ascending by distance, with each list's reach: every stored point not in list i is at least
 /// reach[i] away from point i (the k-th distance; +infinity when the list holds every point).
@@ -196,7 +242,7 @@ template <NearestNeighborSearch S>
 /// Exhaustive search: the reference the kd-trees are tested against, and the fastest choice for
 /// a few dozen points. Non-finite points of the input are skipped (source_index maps back).
 template <int D, class Scalar = double>
-class BruteForceSearch {
+class BruteForceSearch : public SearchQueries<BruteForceSearch<D, Scalar>, D, Scalar> {
  public:
   static constexpr int dimension = D;   ///< 2 or 3
   using scalar_type = Scalar;           ///< coordinate type
@@ -222,40 +268,16 @@ class BruteForceSearch {
   /// The index in the input cloud of stored point i, i < size().
   [[nodiscard]] std::size_t source_index(std::size_t i) const { return source_[i]; }
 
-  /// The closest stored point with distance_sq < max_distance_sq (the first one on a tie), or
-  /// nothing when no point is that close.
-  [[nodiscard]] std::optional<Neighbor<Scalar>> nearest(
-      const point_type& q, Scalar max_distance_sq = unbounded_sq<Scalar>) const {
-    detail::NearestCollector<Scalar> c(max_distance_sq);
-    for (std::size_t i = 0; i < points_.size(); ++i)
-      c.addPoint((points_[i] - q).squaredNorm(), static_cast<std::uint32_t>(i));
-    return c.result();
-  }
-  /// Replaces `out` by the (at most) k closest points with distance_sq < max_distance_sq,
-  /// ascending by distance (ties by index); returns their count.
-  std::size_t knn(const point_type& q, std::size_t k, std::vector<Neighbor<Scalar>>& out,
-                  Scalar max_distance_sq = unbounded_sq<Scalar>) const {
-    out.resize(k);
-    if (k == 0) return 0;
-    detail::KnnCollector<Scalar> c(out.data(), k, max_distance_sq);
-    for (std::size_t i = 0; i < points_.size(); ++i)
-      c.addPoint((points_[i] - q).squaredNorm(), static_cast<std::uint32_t>(i));
-    out.resize(c.size());
-    return out.size();
-  }
-  /// Replaces `out` by every point with distance_sq < radius_sq, ascending by distance (ties by
-  /// index); returns their count.
-  std::size_t radius(const point_type& q, Scalar radius_sq,
-                     std::vector<Neighbor<Scalar>>& out) const {
-    out.clear();
-    detail::RadiusCollector<Scalar> c(out, radius_sq);
-    for (std::size_t i = 0; i < points_.size(); ++i)
-      c.addPoint((points_[i] - q).squaredNorm(), static_cast<std::uint32_t>(i));
-    detail::sort_by_distance(out);
-    return out.size();
-  }
+  // nearest() / knn() / radius(): SearchQueries (points in index order: ties go to the first).
 
  private:
+  friend class SearchQueries<BruteForceSearch, D, Scalar>;
+  template <class Collector>
+  void collect(Collector& c, const point_type& q, Scalar) const {
+    for (std::size_t i = 0; i < points_.size(); ++i)
+      c.addPoint((points_[i] - q).squaredNorm(), static_cast<std::uint32_t>(i));
+  }
+
   std::vector<point_type> points_;
   std::vector<std::uint32_t> source_;
 };
