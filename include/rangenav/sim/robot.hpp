@@ -108,65 +108,73 @@ inline FootprintPolygon footprint_body(const Footprint& fp, const Pose2d& pose) 
 }
 }  // namespace footprint_geometry
 
-/// The primitives a footprint at a pose touches (holes: the footprint is over a lowered floor).
-[[nodiscard]] inline std::vector<PrimitiveRef> footprint_contacts(const World& world,
-                                                                  const Footprint& fp,
-                                                                  const Pose2d& pose) {
+namespace footprint_geometry {
+/// Calls visit(ref, d) for every primitive within `reach` of the footprint's bounding circle
+/// whose height band meets the footprint's (floor holes at any height): d is the distance (m)
+/// from the footprint to the primitive, 0 or less when they touch. A disc's distance is its
+/// centre's minus its radius, a cylinder's its axis' minus the cylinder's radius.
+template <class Visit>
+void for_each_primitive_distance(const World& world, const Footprint& fp, const Pose2d& pose,
+                                 double reach, Visit&& visit) {
   namespace bg = boost::geometry;
-  using P = footprint_geometry::FootprintPoint;
-  using Polygon = footprint_geometry::FootprintPolygon;
-  using Segment = bg::model::segment<P>;
-  const auto to_p = footprint_geometry::footprint_point;
-  const auto rect = footprint_geometry::footprint_rect;
+  using Segment = bg::model::segment<FootprintPoint>;
   const bool circle = fp.shape == Footprint::Shape::circle;
-  const P centre(pose.x, pose.y);
-  const Polygon body = circle ? Polygon{} : footprint_geometry::footprint_body(fp, pose);
-  const auto touches_polygon = [&](const Polygon& poly) {
-    return circle ? bg::distance(centre, poly) <= fp.radius : bg::intersects(body, poly);
+  const FootprintPoint centre(pose.x, pose.y);
+  const FootprintPolygon body = circle ? FootprintPolygon{} : footprint_body(fp, pose);
+  const auto distance = [&](const auto& geometry) {
+    return circle ? bg::distance(centre, geometry) - fp.radius : bg::distance(body, geometry);
   };
   const auto band = [&](double z0, double z1) { return z0 <= fp.z_max && z1 >= fp.z_min; };
-
-  const double r = fp.bounding_radius();
-  std::vector<PrimitiveRef> candidates, contacts;
+  const double r = fp.bounding_radius() + reach;
+  std::vector<PrimitiveRef> candidates;
   world.primitives_near(pose.position() - Point2d::Constant(r),
                         pose.position() + Point2d::Constant(r), candidates);
   for (const PrimitiveRef& ref : candidates) {
-    bool touch = false;
     switch (ref.kind) {
       case SurfaceKind::wall: {
         const Wall& w = world.walls()[ref.index];
-        if (!band(0, w.height)) break;
-        const Segment s(to_p(w.a), to_p(w.b));
-        touch = circle ? bg::distance(centre, s) <= fp.radius : bg::intersects(body, s);
+        if (band(0, w.height))
+          visit(ref, distance(Segment(footprint_point(w.a), footprint_point(w.b))));
         break;
       }
       case SurfaceKind::box: {
         const Box& b = world.boxes()[ref.index];
-        if (band(b.z_min, b.z_max)) touch = touches_polygon(rect(b.center, b.size / 2, b.yaw));
+        if (band(b.z_min, b.z_max))
+          visit(ref, distance(footprint_rect(b.center, b.size / 2, b.yaw)));
         break;
       }
       case SurfaceKind::cylinder: {
         const Cylinder& c = world.cylinders()[ref.index];
-        if (!band(c.z_min, c.z_max)) break;
-        touch = circle ? (c.center - pose.position()).norm() <= fp.radius + c.radius
-                       : bg::distance(to_p(c.center), body) <= c.radius;
+        if (band(c.z_min, c.z_max)) visit(ref, distance(footprint_point(c.center)) - c.radius);
         break;
       }
       case SurfaceKind::door: {
         const Box b = world.doors()[ref.index].leaf();
-        if (band(b.z_min, b.z_max)) touch = touches_polygon(rect(b.center, b.size / 2, b.yaw));
+        if (band(b.z_min, b.z_max))
+          visit(ref, distance(footprint_rect(b.center, b.size / 2, b.yaw)));
         break;
       }
       case SurfaceKind::hole: {
         const FloorHole& h = world.holes()[ref.index];
-        touch = touches_polygon(rect(h.center, h.size / 2, h.yaw));
+        visit(ref, distance(footprint_rect(h.center, h.size / 2, h.yaw)));
         break;
       }
       default:
         break;
     }
-    if (touch) contacts.push_back(ref);
   }
+}
+}  // namespace footprint_geometry
+
+/// The primitives a footprint at a pose touches (holes: the footprint is over a lowered floor).
+[[nodiscard]] inline std::vector<PrimitiveRef> footprint_contacts(const World& world,
+                                                                  const Footprint& fp,
+                                                                  const Pose2d& pose) {
+  std::vector<PrimitiveRef> contacts;
+  footprint_geometry::for_each_primitive_distance(world, fp, pose, 0.0,
+                                                  [&](const PrimitiveRef& ref, double d) {
+                                                    if (d <= 0) contacts.push_back(ref);
+                                                  });
   return contacts;
 }
 
@@ -176,58 +184,10 @@ inline FootprintPolygon footprint_body(const Footprint& fp, const Pose2d& pose) 
 /// ground truth for "how close did the robot come" (footprint_contacts says only whether).
 [[nodiscard]] inline double footprint_clearance(const World& world, const Footprint& fp,
                                                 const Pose2d& pose, double max_distance = 1.0) {
-  namespace bg = boost::geometry;
-  using P = footprint_geometry::FootprintPoint;
-  using Polygon = footprint_geometry::FootprintPolygon;
-  using Segment = bg::model::segment<P>;
-  const auto to_p = footprint_geometry::footprint_point;
-  const auto rect = footprint_geometry::footprint_rect;
-  const bool circle = fp.shape == Footprint::Shape::circle;
-  const P centre(pose.x, pose.y);
-  const Polygon body = circle ? Polygon{} : footprint_geometry::footprint_body(fp, pose);
-  // Distance from the footprint to a geometry: a disc's is the centre's minus the radius.
-  const auto distance = [&](const auto& geometry) {
-    return circle ? bg::distance(centre, geometry) - fp.radius : bg::distance(body, geometry);
-  };
-  const auto band = [&](double z0, double z1) { return z0 <= fp.z_max && z1 >= fp.z_min; };
-  const double reach = fp.bounding_radius() + max_distance;
-  std::vector<PrimitiveRef> candidates;
-  world.primitives_near(pose.position() - Point2d::Constant(reach),
-                        pose.position() + Point2d::Constant(reach), candidates);
   double best = max_distance;
-  for (const PrimitiveRef& ref : candidates) {
-    double d = max_distance;
-    switch (ref.kind) {
-      case SurfaceKind::wall: {
-        const Wall& w = world.walls()[ref.index];
-        if (band(0, w.height)) d = distance(Segment(to_p(w.a), to_p(w.b)));
-        break;
-      }
-      case SurfaceKind::box: {
-        const Box& b = world.boxes()[ref.index];
-        if (band(b.z_min, b.z_max)) d = distance(rect(b.center, b.size / 2, b.yaw));
-        break;
-      }
-      case SurfaceKind::cylinder: {
-        const Cylinder& c = world.cylinders()[ref.index];
-        if (band(c.z_min, c.z_max)) d = distance(to_p(c.center)) - c.radius;
-        break;
-      }
-      case SurfaceKind::door: {
-        const Box b = world.doors()[ref.index].leaf();
-        if (band(b.z_min, b.z_max)) d = distance(rect(b.center, b.size / 2, b.yaw));
-        break;
-      }
-      case SurfaceKind::hole: {
-        const FloorHole& h = world.holes()[ref.index];
-        d = distance(rect(h.center, h.size / 2, h.yaw));
-        break;
-      }
-      default:
-        break;
-    }
-    best = std::min(best, std::max(0.0, d));
-  }
+  footprint_geometry::for_each_primitive_distance(
+      world, fp, pose, max_distance,
+      [&](const PrimitiveRef&, double d) { best = std::min(best, std::max(0.0, d)); });
   return best;
 }
 
