@@ -106,9 +106,7 @@ inline FootprintPolygon footprint_body(const Footprint& fp, const Pose2d& pose) 
   return footprint_rect(pose.transform_point({fp.x_offset, 0}), {fp.length / 2, fp.width / 2},
                         pose.theta);
 }
-}  // namespace footprint_geometry
 
-namespace footprint_geometry {
 /// Calls visit(ref, d) for every primitive within `reach` of the footprint's bounding circle
 /// whose height band meets the footprint's (floor holes at any height): d is the distance (m)
 /// from the footprint to the primitive, 0 or less when they touch. A disc's distance is its
