@@ -107,10 +107,10 @@ inline FootprintPolygon footprint_body(const Footprint& fp, const Pose2d& pose) 
                         pose.theta);
 }
 
-/// A footprint placed at a pose, as Boost.Geometry sees it: a disc (its centre and radius) or a
-/// rectangle (its body polygon).
+/// A footprint at a pose as Boost.Geometry sees it: a disc (centre, radius) or a body polygon.
 class PlacedFootprint {
  public:
+  /// Places `fp` at `pose`.
   PlacedFootprint(const Footprint& fp, const Pose2d& pose)
       : circle_(fp.shape == Footprint::Shape::circle),
         radius_(fp.radius),
