@@ -422,16 +422,21 @@ void BM_open3d_3d(benchmark::State& state, const Pair3& (*get)(), Method method)
 
 // ---- registration and the ratio table ---------------------------------------------------------
 
-/// Console output plus a record of every run's times, for the ratios printed at the end.
+/// Console output plus a record of every run's times (the medians when repeated, so that
+/// --benchmark_report_aggregates_only keeps them), for the ratios printed at the end.
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
     // Keyed by "<name>/<threads>": benchmark_name() also carries the min_time and real_time
     // suffixes of the 3D rows.
-    for (const Run& run : runs)
-      if (!run.error_occurred && run.run_type == Run::RT_Iteration)
+    for (const Run& run : runs) {
+      if (run.error_occurred) continue;
+      const bool single = run.run_type == Run::RT_Iteration && run.repetitions <= 1;
+      const bool median = run.run_type == Run::RT_Aggregate && run.aggregate_name == "median";
+      if (single || median)
         times_[run.run_name.function_name + "/" + run.run_name.args] = {run.GetAdjustedRealTime(),
                                                                         run.GetAdjustedCPUTime()};
+    }
     ConsoleReporter::ReportRuns(runs);
   }
 
