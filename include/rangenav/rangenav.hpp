@@ -70,6 +70,7 @@
 #include "rangenav/registration/correspondence.hpp"
 #include "rangenav/registration/frustum.hpp"
 #include "rangenav/registration/gauss_newton.hpp"
+#include "rangenav/registration/gauss_newton_solver.hpp"
 #include "rangenav/registration/gicp_solver.hpp"
 #include "rangenav/registration/hayai.hpp"
 #include "rangenav/registration/icp.hpp"

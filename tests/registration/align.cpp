@@ -15,6 +15,7 @@
 #include "rangenav/geometry/voxel_grid.hpp"
 #include "rangenav/io/ply.hpp"
 #include "rangenav/registration/align.hpp"
+#include "rangenav/registration/gauss_newton_solver.hpp"
 #include "rangenav/registration/gicp_solver.hpp"
 #include "rangenav/registration/icp.hpp"
 #include "rangenav/registration/normals.hpp"
@@ -469,6 +470,32 @@ struct TranslationSolver {
   }
 };
 
+/// A least-squares solver of a user's own on GaussNewtonSolver: point-to-point written out by
+/// hand in the tangent space of transform_solver.hpp (r = R^T (T d - m), J = [I | S(d)]).
+/// `skip_all` leaves every pair out, so solve() must fall back to the point-to-point solution.
+struct HandWrittenSolver : GaussNewtonSolver<HandWrittenSolver, 2, double, 3> {
+  static constexpr std::size_t min_pairs = 3;
+  bool skip_all = false;
+  struct Residual {
+    const HandWrittenSolver* solver;
+    template <class Apply>
+    bool operator()(const Correspondence<2, double>& pr, const Apply& apply,
+                    const Eigen::Matrix2d& rt, NormalEquations<2, double>& eq) const {
+      if (solver->skip_all) return false;
+      const Eigen::Vector2d r = rt * (apply(pr.data) - pr.model);
+      Eigen::Matrix<double, 2, 3> j;
+      j << 1, 0, -pr.data.y(), 0, 1, pr.data.x();
+      eq.hessian += j.transpose() * j;
+      eq.gradient += j.transpose() * r;
+      eq.cost += r.squaredNorm();
+      eq.weighted_sq += r.squaredNorm();
+      eq.residuals += 2;
+      ++eq.pairs;
+      return true;
+    }
+  };
+};
+
 }  // namespace
 
 static_assert(NearestNeighborSearch<ListSearch>);
@@ -495,6 +522,32 @@ TEST_CASE("a user's own solver, rejector and search plug into ICP", "[registrati
   REQUIRE(r.information);
   CHECK((*r.information)(0, 0) > 0.0);
   CHECK(std::abs((*r.information)(2, 2)) < 1e-9 * (*r.information)(0, 0));
+}
+
+TEST_CASE("a user's Gauss-Newton solver needs only its residual", "[registration]") {
+  const auto model = test::room_2d(0.1);
+  const Transform2d truth = make_transform2(0.2, -0.1, 0.08);
+  const auto data = test::transformed<2>(model, truth.inverse(Eigen::Isometry));
+  static_assert(TransformSolver<HandWrittenSolver, 2, double>);
+  for (const bool skip_all : {false, true}) {
+    CAPTURE(skip_all);
+    BasicIcp<2, double, HandWrittenSolver, MaxDistanceRejector<double>> icp;
+    icp.rejector<MaxDistanceRejector<double>>().max_distance = 0.5;
+    icp.solver.skip_all = skip_all;  // true: every step falls back to point-to-point
+    const KdTree<2, double> tree(model);
+    const auto r = icp.align(tree, data);
+    CHECK(r.converged);
+    const auto [dt, dr] = transform_error<2>(r.transform, truth);
+    CHECK(dt < 1e-4);
+    CHECK(dr < 1e-4);
+    if (!skip_all) {
+      // The information is the hand-written normal equations': the pairs' count on the
+      // translation diagonal (unit weights, divided by the residual variance).
+      REQUIRE(r.information);
+      CHECK((*r.information)(0, 0) > 0.0);
+      CHECK((*r.information)(2, 2) > 0.0);
+    }
+  }
 }
 
 TEST_CASE("align answers bad input clearly", "[registration]") {

@@ -22,22 +22,20 @@
 #include <Eigen/LU>
 #include <concepts>
 #include <cstddef>
-#include <optional>
 #include <span>
-#include <vector>
 
 #include "rangenav/core/robust_kernel.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/registration/correspondence.hpp"
-#include "rangenav/registration/gauss_newton.hpp"
-#include "rangenav/registration/point_to_point_solver.hpp"
+#include "rangenav/registration/gauss_newton_solver.hpp"
 #include "rangenav/registration/transform_solver.hpp"
 
 namespace rangenav {
 
-/// Generalized-ICP solver (see the file comment). Models CovarianceSolver.
+/// Generalized-ICP solver (see the file comment). Models CovarianceSolver; kernel, steps and the
+/// rest of its settings are GaussNewtonSolver's.
 template <int D, std::floating_point Scalar = double>
-struct GicpSolver {
+struct GicpSolver : GaussNewtonSolver<GicpSolver<D, Scalar>, D, Scalar, 1> {
   static_assert(D == 2 || D == 3, "GicpSolver: dimension must be 2 or 3");
   static constexpr std::size_t min_pairs = 3;  ///< fewer pairs do not determine a transform
   using covariance_type = Eigen::Matrix<Scalar, D, D>;  ///< a point's covariance
@@ -49,37 +47,9 @@ struct GicpSolver {
   /// The normal-direction variance eps of the regularised covariances (the value given to
   /// estimate_covariances): scales the residual into metres (see the file comment).
   Scalar epsilon = Scalar(1e-3);
-  /// Robust kernel on s_i (m^2): its delta is a distance.
-  RobustKernel<Scalar> kernel{};
-  /// Gauss-Newton steps per ICP iteration (on the same pairs).
-  int gauss_newton_steps = 1;
-  /// Steps stop when the update moves less than this (m, and rad).
-  Scalar step_epsilon = Scalar(1e-7);
-  /// Directions of the normal equations whose eigenvalue is below this fraction of the
-  /// largest are left to the prior or unchanged (transform_solver.hpp, gauss_newton.hpp).
-  Scalar degeneracy_ratio = static_cast<Scalar>(default_degeneracy_ratio);
-
-  /// The next transform of an ICP iteration, from ctx.current.
-  [[nodiscard]] std::optional<Transform<D, Scalar>> solve(
-      std::span<const Correspondence<D, Scalar>> pairs, const SolveContext<D, Scalar>& ctx) const {
-    if (pairs.size() < min_pairs) return std::nullopt;
-    if (auto t = detail::gauss_newton<D, Scalar>(pairs, ctx.current, ctx, gauss_newton_steps,
-                                                 step_epsilon, degeneracy_ratio, scratch_,
-                                                 Residual{this}))
-      return t;
-    PointToPointSolver<D, Scalar> fallback;
-    fallback.kernel = kernel;
-    return fallback.solve(pairs, ctx);
-  }
-
-  /// The normal equations of E at t.
-  [[nodiscard]] NormalEquations<D, Scalar> linearize(
-      std::span<const Correspondence<D, Scalar>> pairs, const Transform<D, Scalar>& t,
-      int num_threads) const {
-    return detail::linearize_at<D, Scalar>(pairs, t, num_threads, scratch_, Residual{this});
-  }
 
  private:
+  friend GaussNewtonSolver<GicpSolver, D, Scalar, 1>;
   struct Residual {
     const GicpSolver* solver;
     template <class Apply>
@@ -98,8 +68,6 @@ struct GicpSolver {
       return true;
     }
   };
-
-  mutable std::vector<detail::Linearization<D, Scalar>> scratch_;
 };
 
 }  // namespace rangenav

@@ -26,15 +26,12 @@
 #include <cmath>
 #include <concepts>
 #include <cstddef>
-#include <optional>
 #include <span>
-#include <vector>
 
 #include "rangenav/core/robust_kernel.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/registration/correspondence.hpp"
-#include "rangenav/registration/gauss_newton.hpp"
-#include "rangenav/registration/point_to_point_solver.hpp"
+#include "rangenav/registration/gauss_newton_solver.hpp"
 #include "rangenav/registration/transform_solver.hpp"
 
 namespace rangenav {
@@ -58,45 +55,18 @@ void add_point_to_plane(NormalEquations<D, Scalar>& eq, const RobustKernel<Scala
 
 }  // namespace detail
 
-/// Point-to-plane (2D: point-to-line) solver (see the file comment). Models ModelNormalSolver.
+/// Point-to-plane (2D: point-to-line) solver (see the file comment). Models ModelNormalSolver;
+/// kernel, steps and the rest of its settings are GaussNewtonSolver's.
 template <int D, std::floating_point Scalar = double>
-struct PointToPlaneSolver {
+struct PointToPlaneSolver : GaussNewtonSolver<PointToPlaneSolver<D, Scalar>, D, Scalar, 3> {
   static_assert(D == 2 || D == 3, "PointToPlaneSolver: dimension must be 2 or 3");
   static constexpr std::size_t min_pairs = 3;  ///< fewer pairs do not determine a transform
 
   /// Unit model normals indexed by model index (zero = no plane); must outlive solve().
   std::span<const Point<D, Scalar>> model_normals{};
-  /// Robust kernel on the squared point-to-plane distance (m^2): its delta is a distance.
-  RobustKernel<Scalar> kernel{};
-  /// Gauss-Newton steps per ICP iteration (on the same pairs).
-  int gauss_newton_steps = 3;
-  /// Steps stop when the update moves less than this (m, and rad).
-  Scalar step_epsilon = Scalar(1e-7);
-  /// Directions of the normal equations whose eigenvalue is below this fraction of the
-  /// largest are left to the prior or unchanged (transform_solver.hpp, gauss_newton.hpp).
-  Scalar degeneracy_ratio = static_cast<Scalar>(default_degeneracy_ratio);
-
-  /// The next transform of an ICP iteration, from ctx.current (see the file comment).
-  [[nodiscard]] std::optional<Transform<D, Scalar>> solve(
-      std::span<const Correspondence<D, Scalar>> pairs, const SolveContext<D, Scalar>& ctx) const {
-    if (pairs.size() < min_pairs) return std::nullopt;
-    if (auto t = detail::gauss_newton<D, Scalar>(pairs, ctx.current, ctx, gauss_newton_steps,
-                                                 step_epsilon, degeneracy_ratio, scratch_,
-                                                 Residual{this}))
-      return t;
-    PointToPointSolver<D, Scalar> fallback;
-    fallback.kernel = kernel;
-    return fallback.solve(pairs, ctx);
-  }
-
-  /// The normal equations of E at t.
-  [[nodiscard]] NormalEquations<D, Scalar> linearize(
-      std::span<const Correspondence<D, Scalar>> pairs, const Transform<D, Scalar>& t,
-      int num_threads) const {
-    return detail::linearize_at<D, Scalar>(pairs, t, num_threads, scratch_, Residual{this});
-  }
 
  private:
+  friend GaussNewtonSolver<PointToPlaneSolver, D, Scalar, 3>;
   struct Residual {
     const PointToPlaneSolver* solver;
     template <class Apply>
@@ -110,8 +80,6 @@ struct PointToPlaneSolver {
       return true;
     }
   };
-
-  mutable std::vector<detail::Linearization<D, Scalar>> scratch_;
 };
 
 }  // namespace rangenav
