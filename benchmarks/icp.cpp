@@ -37,6 +37,7 @@
 #include "rangenav/registration/align.hpp"
 #include "rangenav/registration/icp.hpp"
 #include "rangenav/search/kd_tree.hpp"
+#include "ratio_runs.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -90,6 +91,13 @@ const ScanPairs& csail() {
     return p;
   }();
   return pairs;
+}
+
+/// The scans_per_second counter of a 2D row that registers every scan of `in` to the one before.
+void report_scan_rate(benchmark::State& state, const ScanPairs& in) {
+  state.counters["scans_per_second"] = benchmark::Counter(
+      static_cast<double>(in.scans.size() - 1) * static_cast<double>(state.iterations()),
+      benchmark::Counter::kIsRate);
 }
 
 /// A registration problem with its ground truth T_target_source.
@@ -178,9 +186,7 @@ void BM_rangenav_2d_scan_to_scan(benchmark::State& state) {
       benchmark::DoNotOptimize(icp.align(tree, in.scans[i], in.guesses[i]));
     }
   }
-  state.counters["scans_per_second"] = benchmark::Counter(
-      static_cast<double>(in.scans.size() - 1) * static_cast<double>(state.iterations()),
-      benchmark::Counter::kIsRate);
+  report_scan_rate(state, in);
 }
 
 /// rangenav::align on the pair: the whole call (kd-tree, normals / covariances, ICP).
@@ -291,9 +297,7 @@ void BM_pcl_2d_scan_to_scan(benchmark::State& state) {
       benchmark::DoNotOptimize(icp.getFinalTransformation());
     }
   }
-  state.counters["scans_per_second"] = benchmark::Counter(
-      static_cast<double>(in.scans.size() - 1) * static_cast<double>(state.iterations()),
-      benchmark::Counter::kIsRate);
+  report_scan_rate(state, in);
 }
 
 /// PCL's ICP (point-to-point) and GICP (single-threaded): the registration object builds its
@@ -367,9 +371,7 @@ void BM_open3d_2d_scan_to_scan(benchmark::State& state) {
                                                     reg::ICPConvergenceCriteria(1e-6, 1e-6, 30)));
     }
   }
-  state.counters["scans_per_second"] = benchmark::Counter(
-      static_cast<double>(in.scans.size() - 1) * static_cast<double>(state.iterations()),
-      benchmark::Counter::kIsRate);
+  report_scan_rate(state, in);
 }
 
 /// Open3D's RegistrationICP / GeneralizedICP; normals and covariances estimated inside the timing
@@ -429,14 +431,10 @@ class RatioReporter : public benchmark::ConsoleReporter {
   void ReportRuns(const std::vector<Run>& runs) override {
     // Keyed by "<name>/<threads>": benchmark_name() also carries the min_time and real_time
     // suffixes of the 3D rows.
-    for (const Run& run : runs) {
-      if (run.error_occurred) continue;
-      const bool single = run.run_type == Run::RT_Iteration && run.repetitions <= 1;
-      const bool median = run.run_type == Run::RT_Aggregate && run.aggregate_name == "median";
-      if (single || median)
+    for (const Run& run : runs)
+      if (rangenav_bench::is_ratio_run(run))
         times_[run.run_name.function_name + "/" + run.run_name.args] = {run.GetAdjustedRealTime(),
                                                                         run.GetAdjustedCPUTime()};
-    }
     ConsoleReporter::ReportRuns(runs);
   }
 

@@ -13,6 +13,7 @@
 
 #include "rangenav/io/pcd.hpp"
 #include "rangenav/io/ply.hpp"
+#include "ratio_runs.hpp"
 
 #ifdef RANGENAV_HAVE_PCL
 #include <pcl/io/pcd_io.h>
@@ -123,12 +124,8 @@ void BM_pcl_write_pcd(benchmark::State& state, rangenav::io::PcdFormat format) {
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
-    for (const auto& r : runs) {
-      if (r.error_occurred) continue;
-      const bool single = r.run_type == Run::RT_Iteration && r.repetitions <= 1;
-      const bool median = r.run_type == Run::RT_Aggregate && r.aggregate_name == "median";
-      if (single || median) cpu_[r.run_name.str()] = r.GetAdjustedCPUTime();
-    }
+    for (const auto& r : runs)
+      if (rangenav_bench::is_ratio_run(r)) cpu_[r.run_name.str()] = r.GetAdjustedCPUTime();
     ConsoleReporter::ReportRuns(runs);
   }
   void print_ratios() const {
