@@ -541,8 +541,8 @@ TEST_CASE("a user's Gauss-Newton solver needs only its residual", "[registration
     CHECK(dt < 1e-4);
     CHECK(dr < 1e-4);
     if (!skip_all) {
-      // The information is the hand-written normal equations': the pairs' count on the
-      // translation diagonal (unit weights, divided by the residual variance).
+      // The information comes from the hand-written normal equations, which constrain the
+      // translation and the rotation.
       REQUIRE(r.information);
       CHECK((*r.information)(0, 0) > 0.0);
       CHECK((*r.information)(2, 2) > 0.0);
