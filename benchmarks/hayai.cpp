@@ -156,8 +156,9 @@ void BM_hayai_csail(benchmark::State& state) {
     for (std::size_t k = 0; k < data->lasers.size(); ++k) {
       const auto& laser = data->lasers[k];
       std::optional<Pose2d> odometry;
-      if (k > 0 && laser.odom_pose && data->lasers[k - 1].odom_pose)
-        odometry = relative(*data->lasers[k - 1].odom_pose, *laser.odom_pose);
+      const auto from = k > 0 ? io::laser_odometry(data->lasers[k - 1]) : std::nullopt;
+      const auto to = io::laser_odometry(laser);
+      if (from && to) odometry = relative(*from, *to);
       if (mode == 2) {
         if (odometry) dead_reckoning = compose(dead_reckoning, *odometry);
         poses.push_back(dead_reckoning);

@@ -83,10 +83,10 @@ const ScanPairs& csail() {
     const auto lasers = rangenav::io::read_carmen_lasers(data_dir / "carmen/mit-csail.clf.gz");
     for (std::size_t i = 0; i < lasers.size(); ++i) {
       p.scans.push_back(lasers[i].scan.valid_points());
-      p.guesses.push_back(
-          i == 0
-              ? rangenav::Transform2d::Identity()
-              : rangenav::relative(*lasers[i - 1].odom_pose, *lasers[i].odom_pose).to_isometry());
+      p.guesses.push_back(i == 0 ? rangenav::Transform2d::Identity()
+                                 : rangenav::relative(*rangenav::io::laser_odometry(lasers[i - 1]),
+                                                      *rangenav::io::laser_odometry(lasers[i]))
+                                       .to_isometry());
     }
     return p;
   }();

@@ -66,7 +66,7 @@ Run map_log(const std::vector<rangenav::io::CarmenLaser>& lasers, Mapper mapper)
   Run run;
   for (const auto& laser : lasers) {
     std::optional<rangenav::Transform2d> odom;
-    if (laser.odom_pose) odom = laser.odom_pose->to_isometry();
+    if (const auto pose = rangenav::io::laser_odometry(laser)) odom = pose->to_isometry();
     const auto update = mapper.process(laser.scan, odom);
     if (update.icp && !update.registration_accepted) ++run.rejected;
     run.stamps.push_back(laser.timestamp);
@@ -92,7 +92,7 @@ SlamRun map_log_slam(const std::vector<rangenav::io::CarmenLaser>& lasers, bool 
   SlamRun run;
   for (const auto& laser : lasers) {
     std::optional<rangenav::Transform2d> odom;
-    if (laser.odom_pose) odom = laser.odom_pose->to_isometry();
+    if (const auto pose = rangenav::io::laser_odometry(laser)) odom = pose->to_isometry();
     slam.process(laser.scan, odom);
     run.stamps.push_back(laser.timestamp);
   }
@@ -116,8 +116,10 @@ void open3d_scan_to_scan(const std::vector<rangenav::io::CarmenLaser>& lasers) {
       clouds[i].points_.emplace_back(p.x(), p.y(), 0.0);
   for (std::size_t i = 1; i < lasers.size(); ++i) {
     Eigen::Matrix4d guess = Eigen::Matrix4d::Identity();
-    if (lasers[i].odom_pose && lasers[i - 1].odom_pose) {
-      const auto d = rangenav::relative(*lasers[i - 1].odom_pose, *lasers[i].odom_pose);
+    const auto from = rangenav::io::laser_odometry(lasers[i - 1]);
+    const auto to = rangenav::io::laser_odometry(lasers[i]);
+    if (from && to) {
+      const auto d = rangenav::relative(*from, *to);
       guess.block<2, 2>(0, 0) = d.to_isometry().linear();
       guess.block<2, 1>(0, 3) = d.position();
     }

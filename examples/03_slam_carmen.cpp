@@ -78,13 +78,19 @@ Input apartment_loop() {
   return in;
 }
 
+// One laser of the log (the one with the most records, when it has a front and a rear laser)
+// with the odometry of that laser's frame: the scans are in that frame.
 Input read_log(const std::filesystem::path& path, std::size_t max_scans) {
   Input in;
-  for (auto& laser : rangenav::io::read_carmen_lasers(path)) {
-    if (in.scans.size() >= max_scans) break;
-    in.timestamps.push_back(laser.timestamp);
-    in.odometry.push_back(laser.odom_pose);
-    in.scans.push_back(std::move(laser.scan));
+  auto log = rangenav::io::read_carmen_scan_log(path);
+  if (log.other_laser_records > 0)
+    std::cout << "using the log's " << log.records.size() << " "
+              << rangenav::io::to_string(log.laser) << " records; " << log.other_laser_records
+              << " records of other lasers left out\n";
+  for (std::size_t i = 0; i < log.records.size() && i < max_scans; ++i) {
+    in.timestamps.push_back(log.records[i].timestamp);
+    in.odometry.push_back(log.odometry[i]);
+    in.scans.push_back(std::move(log.records[i].scan));
   }
   return in;
 }

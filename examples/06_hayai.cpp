@@ -117,7 +117,9 @@ struct CsailResult {
 std::optional<CsailResult> track_csail(const std::filesystem::path& log,
                                        const std::filesystem::path& relations_file) {
   if (!std::filesystem::exists(log) || !std::filesystem::exists(relations_file)) return {};
-  const auto lasers = io::read_carmen_lasers(log);
+  // One laser's records, with the odometry of the laser's frame (the scans are in it).
+  const io::CarmenScanLog scan_log = io::read_carmen_scan_log(log);
+  const auto& lasers = scan_log.records;
   const auto relations = io::read_slam_relations(relations_file);
   HayaiTracker<double> alone, fused;
   std::vector<double> stamps;
@@ -126,8 +128,8 @@ std::optional<CsailResult> track_csail(const std::filesystem::path& log,
   double seconds = 0;
   for (std::size_t k = 0; k < lasers.size(); ++k) {
     std::optional<Pose2d> odometry;
-    if (k > 0 && lasers[k].odom_pose && lasers[k - 1].odom_pose)
-      odometry = relative(*lasers[k - 1].odom_pose, *lasers[k].odom_pose);
+    if (k > 0 && scan_log.odometry[k] && scan_log.odometry[k - 1])
+      odometry = relative(*scan_log.odometry[k - 1], *scan_log.odometry[k]);
     if (odometry) dead_reckoning = compose(dead_reckoning, *odometry);
     const std::clock_t start = std::clock();
     path_alone.push_back(alone.track(lasers[k].scan).pose);

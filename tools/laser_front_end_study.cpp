@@ -153,8 +153,8 @@ int main(int argc, char** argv) {
     std::vector<rangenav::Pose2d> poses;
     for (const auto& laser : lasers) {
       std::optional<rangenav::Transform2d> odometry;
-      if (laser.odom_pose) {
-        rangenav::Pose2d pose = *laser.odom_pose;
+      if (const auto own = rangenav::io::laser_odometry(laser)) {
+        rangenav::Pose2d pose = *own;
         if (seed != 0) {
           pose.x += offset(rng);
           pose.y += offset(rng);

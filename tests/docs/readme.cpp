@@ -64,14 +64,16 @@ TEST_CASE("README: SLAM on a CARMEN log, then a path planned on its map", "[docs
   const docs::SimulatedLog truth = docs::write_apartment_log(log_path);
 
   // [snippet:slam-log]
-  rangenav::LaserSlamMapper<double> slam;    // the 2D laser setup, laser_slam_params()
-  rangenav::io::CarmenReader log(log_path);  // .clf / .log, plain or gzip
+  rangenav::LaserSlamMapper<double> slam;  // the 2D laser setup, laser_slam_params()
+  // One laser's scans of the log (.clf / .log, plain or gzip), with its frame's odometry.
+  const auto log = rangenav::io::read_carmen_scan_log(log_path);
   std::vector<rangenav::Pose2d> trajectory;  // one pose per scan, in the first scan's frame
-  while (auto record = log.next())
-    if (auto* laser = std::get_if<rangenav::io::CarmenLaser>(&*record)) {
-      const auto update = slam.process(laser->scan, laser->odom_pose->to_isometry());
-      trajectory.push_back(rangenav::Pose2d::from_isometry(update.pose));
-    }
+  for (std::size_t i = 0; i < log.records.size(); ++i) {
+    std::optional<rangenav::Transform2d> odom;  // none where the log has no pose
+    if (log.odometry[i]) odom = log.odometry[i]->to_isometry();
+    const auto update = slam.process(log.records[i].scan, odom);
+    trajectory.push_back(rangenav::Pose2d::from_isometry(update.pose));
+  }
   // slam.map().points(): the sparse point map (paper 000 §3.3)
   // [snippet-end]
 
@@ -130,11 +132,12 @@ TEST_CASE("mapping.md: loop-closing SLAM on a CARMEN log", "[docs]") {
   const docs::SimulatedLog truth = docs::write_apartment_log(log_path);
 
   // [snippet:laser-slam]
-  rangenav::LaserSlam<double> slam;  // the default configuration
-  for (const auto& laser : rangenav::io::read_carmen_lasers(log_path)) {
-    std::optional<rangenav::Transform2d> odom;
-    if (laser.odom_pose) odom = laser.odom_pose->to_isometry();
-    slam.process(laser.scan, odom);
+  rangenav::LaserSlam<double> slam;                               // the default configuration
+  const auto log = rangenav::io::read_carmen_scan_log(log_path);  // one laser (io.md)
+  for (std::size_t i = 0; i < log.records.size(); ++i) {
+    std::optional<rangenav::Transform2d> odom;  // the laser frame's odometry, when known
+    if (log.odometry[i]) odom = log.odometry[i]->to_isometry();
+    slam.process(log.records[i].scan, odom);
   }
   slam.finish();                              // a last optimisation if a loop is pending
   const auto trajectory = slam.trajectory();  // every scan, at the optimised key frames

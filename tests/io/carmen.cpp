@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -383,6 +384,109 @@ TEST_CASE("CarmenReader reads gzip logs, detected by magic bytes", "[io][carmen]
                               "(RANGENAV_HAVE_ZLIB)");
   (void)plain;
 #endif
+}
+
+namespace {
+
+// "x y theta" as a log writes it (17 significant digits: the poses are read back exactly).
+std::string pose_fields(const Pose2d& p) {
+  char buffer[96];
+  std::snprintf(buffer, sizeof buffer, "%.17g %.17g %.17g", p.x, p.y, p.theta);
+  return buffer;
+}
+
+}  // namespace
+
+TEST_CASE("read_carmen_scan_log keeps one laser with the odometry of its frame", "[io][carmen]") {
+  // A robot turns on a circle; its front laser sits 0.3 m ahead of the axle and its rear laser
+  // 0.2 m behind it, looking backwards. CARMEN writes each laser's pose (the robot's odometry
+  // with the mounting offset) and the robot's odometry pose into every FLASER / RLASER record.
+  const Pose2d front{0.3, 0.0, 0.0}, rear{-0.2, 0.0, pi};
+  std::vector<Pose2d> robot;
+  for (int i = 0; i < 4; ++i)
+    robot.push_back({2.0 * std::sin(0.3 * i), 2.0 - 2.0 * std::cos(0.3 * i), 0.3 * i});
+  std::string text = "# front and rear laser\n";
+  const auto laser_line = [&](const char* tag, const Pose2d& laser, const Pose2d& odometry) {
+    text.append(tag).append(" 3 1 2 3 ").append(pose_fields(laser)).append(" ");
+    text.append(pose_fields(odometry)).append(" 100 host 0\n");
+  };
+  for (std::size_t i = 0; i < robot.size(); ++i) {
+    laser_line("FLASER", robot[i] * front, robot[i]);
+    if (i % 2 == 0) laser_line("RLASER", robot[i] * rear, robot[i]);
+    text.append("ODOM ").append(pose_fields(robot[i])).append(" 0 0 0 100 host 0\n");
+  }
+  TempDir dir;
+  const auto path = dir.write("two_lasers.clf", text);
+
+  // The laser with the most records; the other's are counted, not mixed in.
+  const CarmenScanLog log = read_carmen_scan_log(path);
+  CHECK(log.laser == CarmenLaserType::flaser);
+  REQUIRE(log.records.size() == 4);
+  REQUIRE(log.odometry.size() == 4);
+  CHECK(log.other_laser_records == 2);
+  for (std::size_t i = 0; i < robot.size(); ++i) {
+    CHECK(log.records[i].type == CarmenLaserType::flaser);
+    REQUIRE(log.odometry[i]);
+    CHECK(*log.odometry[i] == *log.records[i].laser_pose);
+    // Ground truth: the laser frame moves by front⁻¹ (robot step) front, which differs from
+    // the robot's step by the offset's lever arm on the turn.
+    if (i == 0) continue;
+    const Pose2d step = relative(*log.odometry[i - 1], *log.odometry[i]);
+    const Pose2d truth = inverse(front) * relative(robot[i - 1], robot[i]) * front;
+    CHECK(step.x == Approx(truth.x).margin(1e-12));
+    CHECK(step.y == Approx(truth.y).margin(1e-12));
+    CHECK(step.theta == Approx(truth.theta).margin(1e-12));
+    const Pose2d robot_step = relative(robot[i - 1], robot[i]);
+    CHECK(std::hypot(step.x - robot_step.x, step.y - robot_step.y) > 0.05);
+  }
+
+  // The rear laser on request: its own frame, looking backwards.
+  const CarmenScanLog rear_log = read_carmen_scan_log(path, CarmenLaserType::rlaser);
+  CHECK(rear_log.laser == CarmenLaserType::rlaser);
+  REQUIRE(rear_log.records.size() == 2);
+  CHECK(rear_log.other_laser_records == 4);
+  const Pose2d rear_pose = *rear_log.odometry[1];
+  CHECK(rear_pose.theta == Approx(normalize_angle(robot[2].theta + pi)));
+  CHECK((rear_pose.position() - (robot[2] * rear).position()).norm() < 1e-12);
+}
+
+TEST_CASE("read_carmen_scan_log: raw lasers take the last ODOM before them in file order",
+          "[io][carmen]") {
+  // ROBOTLASER1 and RAWLASER1 of the same scans (two records each), ODOM between them, and
+  // timestamps that run backwards: file order decides, not time.
+  const std::string raw = "RAWLASER1 0 -1.5 3.0 1.5 30 0.01 0 3 1 2 3 0 ";
+  const std::string robot_laser =
+      "ROBOTLASER1 0 -1.5 3.0 1.5 30 0.01 0 3 1 2 3 0 0.5 0.25 0.125 0.25 0.25 0.125 0 0 0 0 0 ";
+  std::string text;
+  text.append(raw).append("50 a 0\n");
+  text.append("ODOM 1.5 -2 0.25 0 0 0 40 a 0\n");
+  text.append(raw).append("30 a 0\n").append(robot_laser).append("20 a 0\n");
+  text.append("ODOM 2.5 -1 0.5 0 0 0 10 a 0\n");
+  text.append(robot_laser).append("0 a 0\n").append(raw).append("0 a 0\n");
+  TempDir dir;
+  const auto path = dir.write("raw.clf", text);
+
+  // Two ROBOTLASER1 records, three RAWLASER1: the raw laser has the most.
+  const CarmenScanLog log = read_carmen_scan_log(path);
+  CHECK(log.laser == CarmenLaserType::rawlaser1);
+  CHECK(to_string(log.laser) == "RAWLASER1");
+  REQUIRE(log.odometry.size() == 3);
+  CHECK(log.other_laser_records == 2);
+  CHECK_FALSE(log.odometry[0]);  // before the first ODOM record
+  CHECK(log.odometry[1] == Pose2d{1.5, -2, 0.25});
+  CHECK(log.odometry[2] == Pose2d{2.5, -1, 0.5});
+
+  // ROBOTLASER1 carries its laser pose beside the robot pose: the laser pose is taken.
+  const CarmenScanLog with_poses = read_carmen_scan_log(path, CarmenLaserType::robotlaser1);
+  REQUIRE(with_poses.odometry.size() == 2);
+  CHECK(with_poses.odometry[0] == Pose2d{0.5, 0.25, 0.125});
+  CHECK(with_poses.odometry[1] == Pose2d{0.5, 0.25, 0.125});
+
+  // A laser the log does not have, and an empty log: no records, no error.
+  CHECK(read_carmen_scan_log(path, CarmenLaserType::flaser).records.empty());
+  const CarmenScanLog empty = read_carmen_scan_log(dir.write("empty.clf", "# nothing\n"));
+  CHECK(empty.records.empty());
+  CHECK(empty.other_laser_records == 0);
 }
 
 TEST_CASE("CarmenReader reads the MIT CSAIL benchmark log", "[io][carmen][data]") {

@@ -52,6 +52,7 @@
 // Ranges and remissions may be anything numeric: NaN, inf, 0 and out-of-range readings are invalid
 // beams of the scan, not errors.
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -88,6 +89,17 @@ enum class CarmenLaserType {
   rawlaser3,    ///< RAWLASER3: laser 3 with its own layout, no pose
   rawlaser4     ///< RAWLASER4: laser 4 with its own layout, no pose
 };
+
+/// The number of CarmenLaserType values.
+inline constexpr std::size_t carmen_laser_type_count = 7;
+
+/// The record tag of a laser type ("FLASER", "RLASER", "ROBOTLASER1", "RAWLASER1", ...).
+[[nodiscard]] constexpr std::string_view to_string(CarmenLaserType type) {
+  constexpr std::array<std::string_view, carmen_laser_type_count> tags{
+      "FLASER", "RLASER", "ROBOTLASER1", "RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4"};
+  const auto index = static_cast<std::size_t>(type);
+  return index < tags.size() ? tags[index] : std::string_view("unknown");
+}
 
 /// One laser record: the scan plus the poses the record carries.
 struct CarmenLaser {
@@ -180,8 +192,6 @@ class CarmenReader {
   [[nodiscard]] const std::filesystem::path& path() const { return lines_.path(); }
 
  private:
-  static constexpr std::size_t laser_types = 7;
-
   /// The evidence for one laser's saturation value (see the top of this file).
   struct Saturation {
     double value = -std::numeric_limits<double>::infinity();  ///< largest reading so far
@@ -489,29 +499,112 @@ class CarmenReader {
   std::map<std::string, std::string> params_;
   std::optional<double> front_laser_max_;
   std::optional<double> rear_laser_max_;
-  std::array<Saturation, laser_types> saturation_{};
+  std::array<Saturation, carmen_laser_type_count> saturation_{};
   std::deque<Pending> pending_;
   std::size_t lasers_read_{0};
   bool finished_{false};
   std::exception_ptr error_;
 };
 
+namespace detail {
+
+// Reads every record of a log, calling on_laser(laser) for each laser record and on_odometry(odom)
+// for each ODOM record in file order. Throws io_error when the log holds more than
+// options.limits.max_points laser records.
+template <class OnLaser, class OnOdometry>
+void for_each_carmen_record(const std::filesystem::path& path, const CarmenReaderOptions& options,
+                            OnLaser&& on_laser, OnOdometry&& on_odometry) {
+  CarmenReader reader(path, options);
+  std::size_t lasers = 0;
+  while (auto record = reader.next()) {
+    if (auto* odometry = std::get_if<CarmenOdometry>(&*record)) {
+      on_odometry(*odometry);
+      continue;
+    }
+    auto& laser = std::get<CarmenLaser>(*record);
+    if (lasers == options.limits.max_points)
+      throw io_error(
+          "rangenav: carmen: " + path.string() + ":" + std::to_string(laser.line) + ": " +
+          exceeds_limit("laser record count", lasers + 1, "max_points", options.limits.max_points));
+    ++lasers;
+    on_laser(laser);
+  }
+}
+
+}  // namespace detail
+
 /// Every laser record of a log, in file order (odometry records are dropped). Throws io_error
 /// when the log holds more than options.limits.max_points laser records.
 inline std::vector<CarmenLaser> read_carmen_lasers(const std::filesystem::path& path,
                                                    CarmenReaderOptions options = {}) {
-  CarmenReader reader(path, options);
   std::vector<CarmenLaser> lasers;
-  while (auto record = reader.next())
-    if (auto* laser = std::get_if<CarmenLaser>(&*record)) {
-      if (lasers.size() == options.limits.max_points)
-        throw io_error("rangenav: carmen: " + path.string() + ":" + std::to_string(laser->line) +
-                       ": " +
-                       detail::exceeds_limit("laser record count", lasers.size() + 1, "max_points",
-                                             options.limits.max_points));
-      lasers.push_back(std::move(*laser));
-    }
+  detail::for_each_carmen_record(
+      path, options, [&](CarmenLaser& laser) { lasers.push_back(std::move(laser)); },
+      [](const CarmenOdometry&) {});
   return lasers;
+}
+
+/// The odometry of the frame a record's scan is in: the laser pose when the record carries one
+/// (FLASER / RLASER "x y theta", ROBOTLASER1's laser pose: CARMEN's odometry of the robot with
+/// the laser's mounting offset applied), else the robot's odometry pose, else nullopt. SLAM and
+/// localisation of the scans need this one: with the robot's pose, a laser mounted ahead of the
+/// axle would see every turn of angle a as an unexplained sideways step of offset x a.
+[[nodiscard]] inline std::optional<Pose2d> laser_odometry(const CarmenLaser& laser) {
+  return laser.laser_pose ? laser.laser_pose : laser.odom_pose;
+}
+
+/// The scans of one laser of a log, with the odometry of that laser's frame
+/// (read_carmen_scan_log()).
+struct CarmenScanLog {
+  CarmenLaserType laser{CarmenLaserType::flaser};  ///< the laser whose records these are
+  std::vector<CarmenLaser> records;                ///< its records, in file order
+  /// Per record: laser_odometry(record); for a record without poses (RAWLASERk) the pose of the
+  /// last ODOM record before it in the file (the robot's: the log does not say where that laser
+  /// is mounted), nullopt before the first ODOM record.
+  std::vector<std::optional<Pose2d>> odometry;
+  std::size_t other_laser_records = 0;  ///< records of the log's other lasers, left out
+};
+
+/// The records of one laser of a CARMEN log, ready for SLAM or localisation: `laser` when given,
+/// else the laser with the most records (on a tie the first in CarmenLaserType's order: a front
+/// laser before a rear one, a record with poses before a raw one). A log may carry a front and a
+/// rear laser, or one laser twice (ROBOTLASER1 and RAWLASER1 of the same scans); their scans are
+/// in different frames and must not be fed to one mapper. The odometry is matched to the scans
+/// by file order, never by timestamp (logs carry zero, repeated or rounded ones). Throws
+/// io_error as read_carmen_lasers(); a log without records of the laser gives empty records.
+[[nodiscard]] inline CarmenScanLog read_carmen_scan_log(
+    const std::filesystem::path& path, std::optional<CarmenLaserType> laser = std::nullopt,
+    CarmenReaderOptions options = {}) {
+  std::vector<CarmenLaser> lasers;
+  std::vector<std::optional<Pose2d>> last_odometry;  // per laser record
+  std::optional<Pose2d> odometry;
+  detail::for_each_carmen_record(
+      path, options,
+      [&](CarmenLaser& l) {
+        lasers.push_back(std::move(l));
+        last_odometry.push_back(odometry);
+      },
+      [&](const CarmenOdometry& o) { odometry = o.pose; });
+  CarmenScanLog log;
+  if (laser) {
+    log.laser = *laser;
+  } else {
+    std::array<std::size_t, carmen_laser_type_count> count{};
+    for (const auto& l : lasers)
+      ++count[static_cast<std::size_t>(l.type)];
+    log.laser = static_cast<CarmenLaserType>(std::max_element(count.begin(), count.end()) -
+                                             count.begin());  // the first of equal counts
+  }
+  for (std::size_t i = 0; i < lasers.size(); ++i) {
+    if (lasers[i].type != log.laser) {
+      ++log.other_laser_records;
+      continue;
+    }
+    const auto own = laser_odometry(lasers[i]);
+    log.odometry.push_back(own ? own : last_odometry[i]);
+    log.records.push_back(std::move(lasers[i]));
+  }
+  return log;
 }
 
 }  // namespace rangenav::io
