@@ -486,17 +486,21 @@ void register_3d(const char* library, const char* data, const Pair3& (*get)(),
   }
 }
 
+// A library's rows on both pairs: KITTI at 1 and 2 threads, the bunny at 1.
+void register_3d(const char* library, void (*fn)(benchmark::State&, const Pair3& (*)(), Method)) {
+  register_3d(library, "kitti", &kitti, fn, true);
+  register_3d(library, "bunny", &bunny, fn, false);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("BM_rangenav_2d_scan_to_scan", BM_rangenav_2d_scan_to_scan)
       ->Unit(benchmark::kMillisecond)
       ->Iterations(2);
-  register_3d("rangenav", "kitti", &kitti, BM_rangenav_3d, true);
-  register_3d("rangenav", "bunny", &bunny, BM_rangenav_3d, false);
+  register_3d("rangenav", BM_rangenav_3d);
 #ifdef RANGENAV_HAVE_SMALL_GICP
-  register_3d("small_gicp", "kitti", &kitti, BM_small_gicp_3d, true);
-  register_3d("small_gicp", "bunny", &bunny, BM_small_gicp_3d, false);
+  register_3d("small_gicp", BM_small_gicp_3d);
 #else
   std::printf("small_gicp not found (../shared/peers/small_gicp): its rows are left out\n");
 #endif
@@ -504,8 +508,7 @@ int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("BM_open3d_2d_scan_to_scan", BM_open3d_2d_scan_to_scan)
       ->Unit(benchmark::kMillisecond)
       ->Iterations(2);
-  register_3d("open3d", "kitti", &kitti, BM_open3d_3d, true);
-  register_3d("open3d", "bunny", &bunny, BM_open3d_3d, false);
+  register_3d("open3d", BM_open3d_3d);
 #else
   std::printf("Open3D not found: its rows are left out\n");
 #endif

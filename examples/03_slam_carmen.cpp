@@ -1,6 +1,7 @@
 // Tutorial 03: 2D laser SLAM with loop closure (paper 000 §3; Hess et al. 2016).
 //
 //   03_slam_carmen [LOG] [--relations FILE] [--out DIR] [--no-loop-closure] [--max-scans N]
+//                  [--laser FLASER|RLASER|ROBOTLASER1|RAWLASER1..4]
 //
 // rangenav::LaserSlam, default-constructed, maps a CARMEN log (plain or .gz):
 //   1. the front end registers every scan against a local sparse point map (scan-to-scan
@@ -26,6 +27,7 @@
 #include <optional>
 #include <random>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "rangenav/io/carmen.hpp"
@@ -78,11 +80,12 @@ Input apartment_loop() {
   return in;
 }
 
-// One laser of the log (the one with the most records, when it has a front and a rear laser)
-// with the odometry of that laser's frame: the scans are in that frame.
-Input read_log(const std::filesystem::path& path, std::size_t max_scans) {
+// One laser of the log (`laser`, else the one with the most records) with the odometry of that
+// laser's frame: the scans are in that frame.
+Input read_log(const std::filesystem::path& path, std::size_t max_scans,
+               std::optional<rangenav::io::CarmenLaserType> laser) {
   Input in;
-  auto log = rangenav::io::read_carmen_scan_log(path);
+  auto log = rangenav::io::read_carmen_scan_log(path, laser);
   if (log.other_laser_records > 0)
     std::cout << "using the log's " << log.records.size() << " "
               << rangenav::io::to_string(log.laser) << " records; " << log.other_laser_records
@@ -95,11 +98,21 @@ Input read_log(const std::filesystem::path& path, std::size_t max_scans) {
   return in;
 }
 
+// The laser type of a record tag ("FLASER", ...), nullopt for another word.
+std::optional<rangenav::io::CarmenLaserType> laser_type(std::string_view tag) {
+  for (std::size_t t = 0; t < rangenav::io::carmen_laser_type_count; ++t) {
+    const auto type = static_cast<rangenav::io::CarmenLaserType>(t);
+    if (rangenav::io::to_string(type) == tag) return type;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
   std::filesystem::path log, out_dir = ".", relations;
   std::size_t max_scans = static_cast<std::size_t>(-1);
+  std::optional<rangenav::io::CarmenLaserType> laser;
   bool loop_closure = true;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -109,17 +122,24 @@ int main(int argc, char** argv) try {
       relations = argv[++i];
     else if (arg == "--max-scans" && i + 1 < argc)
       max_scans = std::stoul(argv[++i]);
-    else if (arg == "--no-loop-closure")
+    else if (arg == "--laser" && i + 1 < argc) {
+      laser = laser_type(argv[++i]);
+      if (!laser) {
+        std::cerr << "03_slam_carmen: unknown laser '" << argv[i] << "'\n";
+        return 2;
+      }
+    } else if (arg == "--no-loop-closure")
       loop_closure = false;
     else if (!arg.empty() && arg[0] != '-')
       log = arg;
     else {
       std::cerr << "usage: 03_slam_carmen [LOG] [--relations FILE] [--out DIR] "
-                   "[--no-loop-closure] [--max-scans N]\n";
+                   "[--no-loop-closure] [--max-scans N] [--laser FLASER|RLASER|ROBOTLASER1|"
+                   "RAWLASER1..4]\n";
       return 2;
     }
   }
-  const Input in = log.empty() ? apartment_loop() : read_log(log, max_scans);
+  const Input in = log.empty() ? apartment_loop() : read_log(log, max_scans, laser);
 
   // The one default configuration; --no-loop-closure keeps the front end alone.
   rangenav::LoopClosureParams<double> loops;

@@ -5,6 +5,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -251,6 +253,46 @@ TEST_CASE("LoopClosingMapper closes the ring with drifting odometry", "[mapping]
   CHECK(closed_error < 0.1);
   CHECK(closed_map < 0.05);
   CHECK(closed_error < open_error);
+}
+
+TEST_CASE("LoopClosingMapper without odometry: the scan's uncertainty, not the motion's",
+          "[mapping][slam]") {
+  // The ring driven again, with no odometry at all (a log of RAWLASER records). There is no
+  // prediction to fuse with or to disagree with: each pose is the registration's, and the
+  // uncertainty it reports is the scan's own, however far the robot moved between scans.
+  const auto run = rangenav::test::ring_run();
+  rangenav::LaserSlam<double> slam;
+  std::size_t accepted = 0, reported = 0;
+  double largest_sigma = 0;
+  for (std::size_t i = 0; i < run.scans.size(); ++i) {
+    const auto update = slam.process(run.scans[i]);
+    const auto& fe = update.front_end;
+    CHECK_FALSE(fe.odometry_fused);
+    if (!fe.icp || !fe.registration_accepted || !fe.information) continue;
+    ++accepted;
+    // The translational σ in its worst direction. The information is the registration's plus
+    // the noise model's floors (those of a step in place), so even along a corridor σ stays
+    // within the floor's; a covariance that took the step between scans for a disagreement
+    // with a "zero motion" prediction would grow with that step.
+    const Eigen::Matrix2d cov = fe.information->inverse().topLeftCorner<2, 2>();
+    const double sigma =
+        std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(cov).eigenvalues().maxCoeff());
+    largest_sigma = std::max(largest_sigma, sigma);
+    ++reported;
+  }
+  slam.finish();
+  const auto trajectory = slam.trajectory();
+  for (const auto& t : trajectory)
+    REQUIRE(t.matrix().allFinite());
+  const double error = trajectory_error(trajectory, run.truth);
+  INFO(accepted << " registrations accepted of " << run.scans.size() << " scans; largest σ "
+                << largest_sigma << " m; trajectory error " << error << " m, "
+                << slam.loop_closures().size() << " loop closures");
+  CHECK(accepted > run.scans.size() * 9 / 10);
+  CHECK(largest_sigma <= rangenav::OdometryNoise<double>{}.translation_floor + 1e-9);
+  CHECK(slam.loop_closures().size() > 0);
+  CHECK(error < 0.1);
+  CHECK(map_error(trajectory, run) < 0.05);
 }
 
 TEST_CASE("The laser front end lets the odometry decide between registrations that disagree",

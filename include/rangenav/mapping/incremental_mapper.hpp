@@ -159,6 +159,8 @@ struct MapperUpdate {
   /// With IncrementalMapperParams::odometry_noise: the information of `pose` relative to the
   /// map (body-frame perturbation, pose_uncertainty.hpp): the registration's fused with the
   /// odometry's, or the odometry's alone when the registration was rejected or there was none.
+  /// A scan without odometry counts as a step in place for the noise model: its floors keep
+  /// the information finite, and nothing is fused into the pose.
   std::optional<lie::PoseMatrix<D, Scalar>> information;
   /// The odometry prediction was fused into the pose (it passed the χ² gate).
   bool odometry_fused = false;
@@ -230,7 +232,8 @@ class IncrementalMapper {
     if (odometry) last_odometry_ = *odometry;
     update.initial_guess = guess;
     update.pose = guess;
-    // The odometry prediction's information (no odometry: a zero increment, the same model).
+    // The odometry prediction's information (no odometry: the noise model's floors, those of
+    // a zero increment; they only keep the information finite, see below).
     std::optional<lie::PoseMatrix<D, Scalar>> odometry_information;
     if (params.odometry_noise) {
       odometry_information =
@@ -376,7 +379,12 @@ class IncrementalMapper {
         // The information is the sum either way: along what the scan leaves free, the pose is
         // no better known than the odometry says.
         update.information = fused.information;
-        if (fused.chi2 <= params.odometry_gate_chi2) {
+        if (!has_increment) {
+          // No odometry: no prediction to fuse with or to disagree with. The information is
+          // the registration's plus the noise model's floors (those of a step in place). Taken
+          // as a disagreement with "no motion", every step would widen the covariance by its
+          // own length, and the loop search's windows with it.
+        } else if (fused.chi2 <= params.odometry_gate_chi2) {
           if (params.fuse_odometry && odometry_consistent) {
             update.pose = fused.pose;
             update.odometry_fused = true;
