@@ -98,15 +98,6 @@ Input read_log(const std::filesystem::path& path, std::size_t max_scans,
   return in;
 }
 
-// The laser type of a record tag ("FLASER", ...), nullopt for another word.
-std::optional<rangenav::io::CarmenLaserType> laser_type(std::string_view tag) {
-  for (std::size_t t = 0; t < rangenav::io::carmen_laser_type_count; ++t) {
-    const auto type = static_cast<rangenav::io::CarmenLaserType>(t);
-    if (rangenav::io::to_string(type) == tag) return type;
-  }
-  return std::nullopt;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) try {
@@ -123,7 +114,7 @@ int main(int argc, char** argv) try {
     else if (arg == "--max-scans" && i + 1 < argc)
       max_scans = std::stoul(argv[++i]);
     else if (arg == "--laser" && i + 1 < argc) {
-      laser = laser_type(argv[++i]);
+      laser = rangenav::io::carmen_laser_type(argv[++i]);
       if (!laser) {
         std::cerr << "03_slam_carmen: unknown laser '" << argv[i] << "'\n";
         return 2;

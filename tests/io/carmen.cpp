@@ -8,6 +8,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -487,6 +488,24 @@ TEST_CASE("read_carmen_scan_log: raw lasers take the last ODOM before them in fi
   const CarmenScanLog empty = read_carmen_scan_log(dir.write("empty.clf", "# nothing\n"));
   CHECK(empty.records.empty());
   CHECK(empty.other_laser_records == 0);
+}
+
+TEST_CASE("carmen_laser_type and to_string name the record tags both ways", "[io][carmen]") {
+  // The seven tags of the CARMEN log format, in CarmenLaserType's order.
+  const std::vector<std::pair<std::string, CarmenLaserType>> tags{
+      {"FLASER", CarmenLaserType::flaser},           {"RLASER", CarmenLaserType::rlaser},
+      {"ROBOTLASER1", CarmenLaserType::robotlaser1}, {"RAWLASER1", CarmenLaserType::rawlaser1},
+      {"RAWLASER2", CarmenLaserType::rawlaser2},     {"RAWLASER3", CarmenLaserType::rawlaser3},
+      {"RAWLASER4", CarmenLaserType::rawlaser4}};
+  REQUIRE(tags.size() == carmen_laser_type_count);
+  for (const auto& [tag, type] : tags) {
+    CHECK(carmen_laser_type(tag) == type);
+    CHECK(to_string(type) == tag);
+  }
+  // Other words of a log, lower case, prefixes and a laser number the format lacks.
+  for (const char* word : {"ODOM", "PARAM", "flaser", "FLASE", "FLASER1", "RAWLASER5", ""})
+    CHECK_FALSE(carmen_laser_type(word));
+  static_assert(carmen_laser_type("RLASER") == CarmenLaserType::rlaser);
 }
 
 TEST_CASE("CarmenReader reads the MIT CSAIL benchmark log", "[io][carmen][data]") {

@@ -101,6 +101,16 @@ inline constexpr std::size_t carmen_laser_type_count = 7;
   return index < tags.size() ? tags[index] : std::string_view("unknown");
 }
 
+/// The laser type of a record tag ("FLASER", "RAWLASER2", ...; case-sensitive as in the logs),
+/// nullopt for any other word (ODOM, PARAM, a command-line typo).
+[[nodiscard]] constexpr std::optional<CarmenLaserType> carmen_laser_type(std::string_view tag) {
+  for (std::size_t t = 0; t < carmen_laser_type_count; ++t) {
+    const auto type = static_cast<CarmenLaserType>(t);
+    if (to_string(type) == tag) return type;
+  }
+  return std::nullopt;
+}
+
 /// One laser record: the scan plus the poses the record carries.
 struct CarmenLaser {
   CarmenLaserType type{CarmenLaserType::flaser};  ///< the record tag the scan came from
@@ -289,15 +299,15 @@ class CarmenReader {
       detail::split_whitespace(line, tokens_);
       if (tokens_.empty() || tokens_[0].front() == '#') continue;
       const std::string_view tag = tokens_[0];
-      if (tag == "FLASER") return parse_old_laser(CarmenLaserType::flaser);
-      if (tag == "RLASER") return parse_old_laser(CarmenLaserType::rlaser);
       if (tag == "ODOM") return parse_odometry();
-      if (tag == "ROBOTLASER1") return parse_new_laser(CarmenLaserType::robotlaser1);
-      if (tag == "RAWLASER1") return parse_new_laser(CarmenLaserType::rawlaser1);
-      if (tag == "RAWLASER2") return parse_new_laser(CarmenLaserType::rawlaser2);
-      if (tag == "RAWLASER3") return parse_new_laser(CarmenLaserType::rawlaser3);
-      if (tag == "RAWLASER4") return parse_new_laser(CarmenLaserType::rawlaser4);
-      if (tag == "PARAM") parse_param();
+      if (tag == "PARAM") {
+        parse_param();
+      } else if (const auto type = carmen_laser_type(tag)) {
+        // FLASER and RLASER are the old format (layout from the beam count, no laser pose).
+        const bool old_format =
+            *type == CarmenLaserType::flaser || *type == CarmenLaserType::rlaser;
+        return old_format ? parse_old_laser(*type) : parse_new_laser(*type);
+      }
     }
     return false;
   }
