@@ -1,5 +1,7 @@
 // libFuzzer harness: CarmenReader over every record of arbitrary bytes, with and without the
 // saturation detection. Every pose and timestamp returned must be finite, every scan consistent.
+// read_carmen_scan_log over the same bytes: one odometry entry per record, each finite, every
+// record of the chosen laser, the other lasers' records counted.
 #include <cmath>
 #include <cstdlib>
 #include <variant>
@@ -32,6 +34,21 @@ void read_all(const std::filesystem::path& path, rangenav::io::CarmenReaderOptio
     }
   }
 }
+
+void read_scan_log(const std::filesystem::path& path) {
+  using namespace rangenav::io;
+  const CarmenScanLog log = read_carmen_scan_log(path);
+  if (log.odometry.size() != log.records.size()) std::abort();
+  if (static_cast<std::size_t>(log.laser) >= carmen_laser_type_count) std::abort();
+  for (std::size_t i = 0; i < log.records.size(); ++i) {
+    if (log.records[i].type != log.laser) std::abort();
+    if (log.odometry[i] && !finite(*log.odometry[i])) std::abort();
+  }
+  // Asking for another laser returns exactly the records counted as other lasers' or fewer.
+  const auto other = static_cast<CarmenLaserType>((static_cast<std::size_t>(log.laser) + 1) %
+                                                  carmen_laser_type_count);
+  if (read_carmen_scan_log(path, other).records.size() > log.other_laser_records) std::abort();
+}
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -40,5 +57,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::expect_success_or_error([&] { read_all(path, {}); });
   fuzz::expect_success_or_error(
       [&] { read_all(path, {.detect_saturation = false, .saturation_lookahead = 0}); });
+  fuzz::expect_success_or_error([&] { read_scan_log(path); });
   return 0;
 }
