@@ -1,0 +1,192 @@
+// relations_audit: the ground-truth relations of the Freiburg SLAM benchmark (Kümmerle et al.
+// 2009) that a 2D SLAM result misses most, and what the two scans of each say about them.
+//
+// The benchmark's relations come from registering pairs of scans, checked by a person. Where the
+// registration of a pair has two minima (along a corridor, in a symmetric room) a relation and a
+// SLAM estimate can sit in different ones, and a large error then says little about which is
+// wrong. For each of the N relations with the largest translational error, the scan at the
+// second timestamp is registered to the scan at the first twice with the same point-to-line ICP
+// (align(), 2D point_to_plane, pairs within 0.3 m): started from the relation and started from
+// the estimate. Two ends within 1 cm of each other are one minimum (the ICP stops on steps of
+// 0.1 mm), and the verdict is which of the two it lies nearer: the relation (the SLAM result is
+// off there) or the estimate (the scans do not support the relation). Otherwise the scans hold
+// two minima; the fitness (fraction of the scan paired) and RMSE of each are printed.
+//
+//   relations_audit [--log LOG] [--relations FILE] [--trajectory FILE] [--worst N]
+//
+//   --log, --relations  default: carmen/mit-csail.clf.gz and slam-benchmark/mit-csail.relations
+//                       in the shared data folder
+//   --trajectory FILE   the estimate: "t x y theta" per line, t the log's scan timestamps (as
+//                       03_slam_carmen writes trajectory.txt); default: LaserSlam, default
+//                       configuration, run on the log here
+//   --worst N           how many relations to examine (default 20)
+//
+// Prints one line per relation, then one JSON line: the relations examined, their share of the
+// summed error, and how many have one minimum at the relation, one at the estimate, or two.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <numbers>
+#include <optional>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "rangenav/io/carmen.hpp"
+#include "rangenav/io/slam_relations.hpp"
+#include "rangenav/io/trajectory.hpp"
+#include "rangenav/mapping/loop_closing_mapper.hpp"
+#include "rangenav/registration/align.hpp"
+
+namespace {
+
+using rangenav::Pose2d;
+
+// The index of the timestamp nearest t in the increasing `stamps`, if within 1 ms (the
+// benchmark's matching, evaluate_slam_relations()).
+std::optional<std::size_t> nearest(std::span<const double> stamps, double t) {
+  const auto it = std::lower_bound(stamps.begin(), stamps.end(), t);
+  std::optional<std::size_t> best;
+  double gap = 1e-3;
+  for (auto c = it == stamps.begin() ? it : it - 1; c != stamps.end() && c <= it; ++c)
+    if (std::abs(*c - t) <= gap) {
+      gap = std::abs(*c - t);
+      best = static_cast<std::size_t>(c - stamps.begin());
+    }
+  return best;
+}
+
+double distance(const rangenav::Transform2d& a, const rangenav::Transform2d& b) {
+  return (a.translation() - b.translation()).norm();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  const std::filesystem::path data(RANGENAV_EXAMPLE_DATA_DIR);
+  std::filesystem::path log_path = data / "carmen/mit-csail.clf.gz";
+  std::filesystem::path relations_path = data / "slam-benchmark/mit-csail.relations";
+  std::filesystem::path trajectory_path;
+  std::size_t worst = 20;
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    if (arg == "--log" && i + 1 < argc) {
+      log_path = argv[++i];
+    } else if (arg == "--relations" && i + 1 < argc) {
+      relations_path = argv[++i];
+    } else if (arg == "--trajectory" && i + 1 < argc) {
+      trajectory_path = argv[++i];
+    } else if (arg == "--worst" && i + 1 < argc && std::atoi(argv[i + 1]) > 0) {
+      worst = static_cast<std::size_t>(std::atoi(argv[++i]));
+    } else {
+      std::fprintf(stderr,
+                   "usage: relations_audit [--log LOG] [--relations FILE] [--trajectory FILE] "
+                   "[--worst N]\n");
+      return 2;
+    }
+  }
+  if (!std::filesystem::exists(log_path) || !std::filesystem::exists(relations_path)) {
+    std::fprintf(stderr, "skipped: %s or %s not found\n", log_path.c_str(), relations_path.c_str());
+    return 0;
+  }
+  const auto log = rangenav::io::read_carmen_scan_log(log_path);
+  const auto relations = rangenav::io::read_slam_relations(relations_path);
+  std::vector<double> scan_stamps;
+  for (const auto& r : log.records)
+    scan_stamps.push_back(r.timestamp);
+  if (!std::is_sorted(scan_stamps.begin(), scan_stamps.end())) {
+    std::fprintf(stderr, "relations_audit: the log's scan timestamps do not increase\n");
+    return 1;
+  }
+
+  // The estimate: a trajectory file, or LaserSlam run here.
+  std::vector<double> stamps;
+  std::vector<Pose2d> poses;
+  if (!trajectory_path.empty()) {
+    for (const auto& p : rangenav::io::read_xytheta(trajectory_path)) {
+      stamps.push_back(p.timestamp);
+      poses.push_back(p.pose);
+    }
+  } else {
+    rangenav::LaserSlam<double> slam;
+    for (std::size_t i = 0; i < log.records.size(); ++i) {
+      std::optional<rangenav::Transform2d> odometry;
+      if (log.odometry[i]) odometry = log.odometry[i]->to_isometry();
+      slam.process(log.records[i].scan, odometry);
+    }
+    slam.finish();
+    stamps = scan_stamps;
+    for (const auto& t : slam.trajectory())
+      poses.push_back(Pose2d::from_isometry(t));
+  }
+
+  // Each relation's error: the benchmark's metric over that relation alone.
+  struct Row {
+    std::size_t relation;
+    double error;
+  };
+  std::vector<Row> rows;
+  double total = 0;
+  for (std::size_t i = 0; i < relations.size(); ++i) {
+    const auto e =
+        rangenav::io::evaluate_slam_relations(std::span(&relations[i], 1), stamps, poses);
+    if (e.all.count == 0) continue;
+    rows.push_back({i, e.all.translation_mean});
+    total += e.all.translation_mean;
+  }
+  std::sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.error > b.error; });
+  rows.resize(std::min(rows.size(), worst));
+
+  rangenav::AlignSettings<double> icp;
+  icp.method = rangenav::RegistrationMethod::point_to_plane;
+  icp.max_correspondence_distance = 0.3;
+  const auto points = [&](std::size_t record) {
+    std::vector<rangenav::Point2d> out;
+    for (const auto& p : log.records[record].scan.points())
+      if (p.allFinite()) out.push_back(p);
+    return out;
+  };
+  std::size_t at_relation = 0, at_estimate = 0, two_minima = 0;
+  double listed = 0;
+  std::printf("%7s %7s %7s | %-26s | %-26s | %s\n", "t1 (s)", "gap (s)", "error",
+              "ICP from the relation", "ICP from the estimate", "the scans' minimum");
+  for (const Row& row : rows) {
+    const auto& r = relations[row.relation];
+    const auto a = nearest(scan_stamps, r.first), b = nearest(scan_stamps, r.second);
+    const auto pa = nearest(stamps, r.first), pb = nearest(stamps, r.second);
+    if (!a || !b || !pa || !pb) continue;
+    listed += row.error;
+    const rangenav::Transform2d relation = r.delta.to_isometry();
+    const rangenav::Transform2d estimate =
+        poses[*pa].to_isometry().inverse(Eigen::Isometry) * poses[*pb].to_isometry();
+    const auto model = points(*a), scan = points(*b);
+    const auto from_relation = rangenav::align(model, scan, relation, icp);
+    const auto from_estimate = rangenav::align(model, scan, estimate, icp);
+    char verdict[96];
+    if (distance(from_relation.transform, from_estimate.transform) < 0.01) {
+      const double to_r = distance(from_estimate.transform, relation);
+      const double to_e = distance(from_estimate.transform, estimate);
+      (to_r < to_e ? at_relation : at_estimate)++;
+      std::snprintf(verdict, sizeof verdict, "one, %.3f m from the relation, %.3f m from ours",
+                    to_r, to_e);
+    } else {
+      ++two_minima;
+      std::snprintf(verdict, sizeof verdict, "two");
+    }
+    std::printf("%7.1f %7.1f %5.3f m | fitness %.2f rmse %.3f m | fitness %.2f rmse %.3f m | %s\n",
+                r.first - scan_stamps.front(), r.second - r.first, row.error, from_relation.fitness,
+                from_relation.rmse, from_estimate.fitness, from_estimate.rmse, verdict);
+  }
+  std::printf(
+      "{\"relations\":%zu,\"examined\":%zu,\"share_of_error\":%.3f,\"one_minimum_at_relation\":%zu,"
+      "\"one_minimum_at_estimate\":%zu,\"two_minima\":%zu}\n",
+      relations.size(), at_relation + at_estimate + two_minima, total > 0 ? listed / total : 0.0,
+      at_relation, at_estimate, two_minima);
+  return 0;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "relations_audit: %s\n", e.what());
+  return 1;
+}
