@@ -44,20 +44,7 @@
 namespace {
 
 using rangenav::Pose2d;
-
-// The index of the timestamp nearest t in the increasing `stamps`, if within 1 ms (the
-// benchmark's matching, evaluate_slam_relations()).
-std::optional<std::size_t> nearest(std::span<const double> stamps, double t) {
-  const auto it = std::lower_bound(stamps.begin(), stamps.end(), t);
-  std::optional<std::size_t> best;
-  double gap = 1e-3;
-  for (auto c = it == stamps.begin() ? it : it - 1; c != stamps.end() && c <= it; ++c)
-    if (std::abs(*c - t) <= gap) {
-      gap = std::abs(*c - t);
-      best = static_cast<std::size_t>(c - stamps.begin());
-    }
-  return best;
-}
+using rangenav::io::nearest_timestamp;
 
 double distance(const rangenav::Transform2d& a, const rangenav::Transform2d& b) {
   return (a.translation() - b.translation()).norm();
@@ -155,8 +142,9 @@ int main(int argc, char** argv) try {
               "ICP from the relation", "ICP from the estimate", "the scans' minimum");
   for (const Row& row : rows) {
     const auto& r = relations[row.relation];
-    const auto a = nearest(scan_stamps, r.first), b = nearest(scan_stamps, r.second);
-    const auto pa = nearest(stamps, r.first), pb = nearest(stamps, r.second);
+    const auto a = nearest_timestamp(scan_stamps, r.first),
+               b = nearest_timestamp(scan_stamps, r.second);
+    const auto pa = nearest_timestamp(stamps, r.first), pb = nearest_timestamp(stamps, r.second);
     if (!a || !b || !pa || !pb) continue;
     listed += row.error;
     const rangenav::Transform2d relation = r.delta.to_isometry();

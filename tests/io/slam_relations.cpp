@@ -129,6 +129,22 @@ TEST_CASE("evaluate_slam_relations computes the Kümmerle metric", "[io][relatio
   }
 }
 
+TEST_CASE("nearest_timestamp matches a time to the nearest entry within the offset",
+          "[io][relations]") {
+  // Binary fractions: the gaps are exact, so the tie below is one.
+  const std::vector<double> stamps{10.0, 10.25, 10.5, 11.0};
+  CHECK(nearest_timestamp(stamps, 10.25) == 1u);       // exact
+  CHECK(nearest_timestamp(stamps, 10.2505) == 1u);     // within the default 1 ms
+  CHECK_FALSE(nearest_timestamp(stamps, 10.252));      // 2 ms from the nearest
+  CHECK(nearest_timestamp(stamps, 10.3, 0.1) == 1u);   // nearer the one before
+  CHECK(nearest_timestamp(stamps, 10.45, 0.1) == 2u);  // nearer the one after
+  CHECK(nearest_timestamp(stamps, 10.75, 0.3) == 3u);  // a tie: the later one
+  CHECK(nearest_timestamp(stamps, 9.9995) == 0u);      // before the first
+  CHECK(nearest_timestamp(stamps, 11.0008) == 3u);     // after the last
+  CHECK_FALSE(nearest_timestamp(stamps, 12.0, 0.5));   // beyond the last by more
+  CHECK_FALSE(nearest_timestamp(std::vector<double>{}, 1.0, 10.0));
+}
+
 TEST_CASE("the MIT CSAIL relations match the CARMEN log's timestamps", "[io][relations][data]") {
   const auto path = rangenav::test::data_file_or_skip("slam-benchmark/mit-csail.relations");
   if (path.empty()) return;

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -83,6 +84,23 @@ struct RelationEvaluation {
   std::size_t missing{0};    ///< relations with a timestamp the trajectory has no pose for
 };
 
+/// The index of the entry of the increasing `timestamps` nearest `t` (the later one on a tie),
+/// or nullopt when none lies within `max_time_offset` seconds: how evaluate_slam_relations()
+/// matches a relation's timestamp to a trajectory.
+[[nodiscard]] inline std::optional<std::size_t> nearest_timestamp(
+    std::span<const double> timestamps, double t, double max_time_offset = 1e-3) {
+  const auto it = std::lower_bound(timestamps.begin(), timestamps.end(), t);
+  std::size_t best = timestamps.size();
+  if (it != timestamps.end()) best = static_cast<std::size_t>(it - timestamps.begin());
+  if (it != timestamps.begin()) {
+    const auto before = static_cast<std::size_t>(it - timestamps.begin()) - 1;
+    if (best == timestamps.size() || t - timestamps[before] < timestamps[best] - t) best = before;
+  }
+  if (best == timestamps.size() || std::abs(timestamps[best] - t) > max_time_offset)
+    return std::nullopt;
+  return best;
+}
+
 /// Evaluates a trajectory given as poses at `timestamps` (increasing) against `relations`. A
 /// relation's timestamp is matched to the nearest trajectory timestamp within `max_time_offset`
 /// seconds; relations without a match are counted as missing. Throws invalid_argument for
@@ -114,16 +132,8 @@ inline RelationEvaluation evaluate_slam_relations(std::span<const SlamRelation> 
       ::rangenav::detail::throw_invalid_argument(where, "relations[i]", i, "is not finite");
   }
   const auto find = [&](double t) -> const Pose2d* {
-    const auto it = std::lower_bound(timestamps.begin(), timestamps.end(), t);
-    std::size_t best = timestamps.size();
-    if (it != timestamps.end()) best = static_cast<std::size_t>(it - timestamps.begin());
-    if (it != timestamps.begin()) {
-      const auto before = static_cast<std::size_t>(it - timestamps.begin()) - 1;
-      if (best == timestamps.size() || t - timestamps[before] < timestamps[best] - t) best = before;
-    }
-    if (best == timestamps.size() || std::abs(timestamps[best] - t) > max_time_offset)
-      return nullptr;
-    return &poses[best];
+    const auto i = nearest_timestamp(timestamps, t, max_time_offset);
+    return i ? &poses[*i] : nullptr;
   };
   struct Sums {
     std::size_t n{0};
