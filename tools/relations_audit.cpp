@@ -1,7 +1,7 @@
 // relations_audit: the ground-truth relations of the Freiburg SLAM benchmark (Kümmerle et al.
 // 2009) that a 2D SLAM result misses most, and what the two scans of each say about them.
 //
-// The benchmark's relations come from registering pairs of scans, checked by a person. Where the
+// The benchmark's relations are alignments of scan pairs that a person inspected. Where the
 // registration of a pair has two minima (along a corridor, in a symmetric room) a relation and a
 // SLAM estimate can sit in different ones, and a large error then says little about which is
 // wrong. For each of the N relations with the largest translational error, the scan at the
@@ -153,13 +153,13 @@ int main(int argc, char** argv) try {
     const auto model = points(*a), scan = points(*b);
     const auto from_relation = rangenav::align(model, scan, relation, icp);
     const auto from_estimate = rangenav::align(model, scan, estimate, icp);
-    char verdict[96];
+    char verdict[128];
     if (distance(from_relation.transform, from_estimate.transform) < 0.01) {
       const double to_r = distance(from_estimate.transform, relation);
       const double to_e = distance(from_estimate.transform, estimate);
       (to_r < to_e ? at_relation : at_estimate)++;
-      std::snprintf(verdict, sizeof verdict, "one, %.3f m from the relation, %.3f m from ours",
-                    to_r, to_e);
+      std::snprintf(verdict, sizeof verdict,
+                    "one, %.3f m from the relation, %.3f m from the estimate", to_r, to_e);
     } else {
       ++two_minima;
       std::snprintf(verdict, sizeof verdict, "two");

@@ -44,7 +44,7 @@ void read_scan_log(const std::filesystem::path& path) {
     if (log.records[i].type != log.laser) std::abort();
     if (log.odometry[i] && !finite(*log.odometry[i])) std::abort();
   }
-  // Asking for another laser returns exactly the records counted as other lasers' or fewer.
+  // Another laser's records are among those counted as left out.
   const auto other = static_cast<CarmenLaserType>((static_cast<std::size_t>(log.laser) + 1) %
                                                   carmen_laser_type_count);
   if (read_carmen_scan_log(path, other).records.size() > log.other_laser_records) std::abort();
