@@ -391,6 +391,52 @@ TEST_CASE("DecayingDistanceRejector decays exponentially to its final distance",
                     "-0.10000000000000001 must be finite and > 0");
 }
 
+TEST_CASE("DecayingDistanceRejector skip_when_converged goes straight to the final distance",
+          "[registration]") {
+  DecayingDistanceRejector<double> r{2.0, 0.1, 0.5};
+  IcpContext<2, double> ctx{2, Transform2d::Identity(), 0, 0};
+  ctx.converged_unsettled = 1;  // the estimate stopped moving at iteration 1 (threshold 1.0)
+  CHECK(r.distance(ctx) == Approx(0.5));  // off: the schedule
+  CHECK_FALSE(r.settled(ctx));
+  r.skip_when_converged = true;
+  CHECK(r.distance(ctx) == Approx(0.1));  // on: the final distance from the next iteration
+  CHECK(r.max_distance_sq(ctx) == Approx(0.01));
+  CHECK(r.settled(ctx));
+  ctx.iteration = 1;
+  CHECK(r.distance(ctx) == Approx(1.0));  // the iteration that converged keeps its threshold
+  ctx.converged_unsettled = -1;
+  ctx.iteration = 2;
+  CHECK(r.distance(ctx) == Approx(0.5));  // no convergence yet: the schedule
+
+  // In ICP: the model is the data moved by a known transform (every point a true pair, 0.5 m
+  // apart, the offset a few centimetres), so the first solve lands on the truth. The schedule
+  // 2.0 * 0.9^k reaches 0.05 m at k = 36; with the skip, the run ends two iterations later.
+  std::vector<Eigen::Vector2d> data;
+  for (int i = 0; i < 10; ++i)
+    for (int j = 0; j < 6; ++j)
+      data.emplace_back(0.5 * i + 0.03 * j, 0.5 * j);
+  const Transform2d truth = make_transform2(0.04, -0.03, 0.02);
+  std::vector<Eigen::Vector2d> model;
+  for (const auto& p : data)
+    model.push_back(truth * p);
+  const KdTree<2, double> tree(model);
+  Icp<2, double, DecayingDistanceRejector<double>> icp;
+  icp.params.max_iterations = 100;
+  icp.rejector<DecayingDistanceRejector<double>>() = {2.0, 0.05, 0.9};
+  const auto scheduled = icp.align(tree, data, Transform2d::Identity());
+  icp.rejector<DecayingDistanceRejector<double>>().skip_when_converged = true;
+  const auto skipped = icp.align(tree, data, Transform2d::Identity());
+  for (const auto* run : {&scheduled, &skipped}) {
+    CHECK(run->reason == IcpTermination::converged);
+    const auto [et, er] = transform_error<2>(run->transform, truth);
+    CHECK(et < 1e-9);
+    CHECK(er < 1e-9);
+    CHECK(run->inlier_count == data.size());
+  }
+  CHECK(scheduled.iterations >= 36);
+  CHECK(skipped.iterations <= 3);
+}
+
 TEST_CASE("UniqueModelPointRejector keeps the closest pair per model point", "[registration]") {
   std::vector<Correspondence<2, double>> pairs = {
       {{0, 0}, {0, 0}, 0.5, 0, 7}, {{0, 0}, {0, 0}, 0.1, 1, 7}, {{0, 0}, {0, 0}, 0.3, 2, 3},

@@ -44,6 +44,11 @@ struct IcpContext {
   Transform<D, Scalar> transform;  ///< current estimate, maps data into the model frame
   std::size_t model_size = 0;      ///< points in the model's search structure
   std::size_t data_size = 0;       ///< finite data points
+  /// The first iteration whose update moved the estimate less than the ICP's epsilons while
+  /// some rejector had not settled (the estimate converged under a threshold still decaying);
+  /// -1 while none has. A rejector may then settle at once (DecayingDistanceRejector::
+  /// skip_when_converged).
+  int converged_unsettled = -1;
 };
 
 namespace detail {

@@ -360,6 +360,7 @@ class BasicIcp {
         coarse = false;  // the subset converged: refine on all points
         continue;
       }
+      if (small && !settled && ctx.converged_unsettled < 0) ctx.converged_unsettled = it;
       if (small && settled) {
         result.reason = IcpTermination::converged;
         result.converged = true;

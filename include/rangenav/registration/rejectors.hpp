@@ -23,6 +23,13 @@ struct DecayingDistanceRejector {
   Scalar initial_distance = Scalar(1.0);  ///< m, threshold of iteration 0
   Scalar final_distance = Scalar(0.1);    ///< m, the threshold never decays below this
   Scalar decay = Scalar(0.8);             ///< factor per iteration, in (0, 1]
+  /// Once the estimate has converged under a threshold that has not yet decayed to
+  /// final_distance (IcpContext::converged_unsettled), go straight to final_distance. The wide
+  /// thresholds are there for the "fast convergence" of paper 000 §3.1; when the estimate has
+  /// stopped moving under one of them, what is left is the fine-tuning under the final one, and
+  /// the iterations of the schedule in between are skipped. Default false: the papers' schedule,
+  /// one threshold per iteration.
+  bool skip_when_converged = false;
 
   /// Throws invalid_argument unless 0 < final <= initial and 0 < decay <= 1.
   void validate() const {
@@ -36,21 +43,29 @@ struct DecayingDistanceRejector {
       detail::throw_invalid_argument(where, "decay", decay, "must be in (0, 1]");
   }
 
-  /// The threshold d_k of iteration k, in metres.
+  /// The threshold d_k of iteration k, in metres (the schedule, without skip_when_converged).
   [[nodiscard]] Scalar distance(int iteration) const {
     return std::max(final_distance,
                     initial_distance * std::pow(decay, static_cast<Scalar>(iteration)));
   }
+  /// The threshold of the context's iteration (m): distance(ctx.iteration), or final_distance
+  /// after a convergence with skip_when_converged.
+  template <int D>
+  [[nodiscard]] Scalar distance(const IcpContext<D, Scalar>& ctx) const {
+    const bool skipped = skip_when_converged && ctx.converged_unsettled >= 0 &&
+                         ctx.iteration > ctx.converged_unsettled;
+    return skipped ? final_distance : distance(ctx.iteration);
+  }
   /// The search bound of the context's iteration: d_k² (m²).
   template <int D>
   [[nodiscard]] Scalar max_distance_sq(const IcpContext<D, Scalar>& ctx) const {
-    const Scalar d = distance(ctx.iteration);
+    const Scalar d = distance(ctx);
     return d * d;
   }
   /// True once the threshold has decayed to final_distance (ICP may then declare convergence).
   template <int D>
   [[nodiscard]] bool settled(const IcpContext<D, Scalar>& ctx) const {
-    return distance(ctx.iteration) <= final_distance;
+    return distance(ctx) <= final_distance;
   }
 };
 
