@@ -486,6 +486,13 @@ TEST_CASE("LaserSlamMapper tracks through odometry that freezes and then jumps",
   // The odometry guess alone is off by the frozen motion.
   CHECK(run(LaserSlamMapper<double>(odometry_only)) > 0.3);
   CHECK(LaserSlamMapper<double>::uses_normals);
+  // The map ICP's threshold goes straight to its final distance once a registration converged
+  // (laser_slam_params); the papers' setup keeps the schedule.
+  CHECK(LaserSlamMapper<double>()
+            .icp.rejector<DecayingDistanceRejector<double>>()
+            .skip_when_converged);
+  CHECK_FALSE(
+      IncrementalMapper<2>().icp.rejector<DecayingDistanceRejector<double>>().skip_when_converged);
   CHECK_FALSE(IncrementalMapper<2>::uses_normals);
 
   // Bad input: all-NaN and identical-point scans keep the guess, never a NaN pose; bad
