@@ -62,7 +62,7 @@ struct DecayingDistanceRejector {
     const Scalar d = distance(ctx);
     return d * d;
   }
-  /// True once the threshold has decayed to final_distance (ICP may then declare convergence).
+  /// True once the threshold is final_distance (ICP may then declare convergence).
   template <int D>
   [[nodiscard]] bool settled(const IcpContext<D, Scalar>& ctx) const {
     return distance(ctx) <= final_distance;
