@@ -134,6 +134,51 @@ TEST_CASE("CorrelativeScanMatcher finds the true pose, as the exhaustive search 
   CHECK((truth.inverse(Eigen::Isometry) * from_near->pose).translation().norm() < 0.1);
 }
 
+TEST_CASE("CorrelativeScanMatcher searches a rectangular window", "[mapping][slam]") {
+  const ScanPair pair = ring_corridor_pair();
+  const auto& model = pair.model;
+  const auto& data = pair.data;
+  const Transform2d& truth = pair.truth;
+  // Predicted 0.1 m off the truth in x and 0.8 m in y (model frame), the heading right.
+  Transform2d initial = truth;
+  initial.translation() += Eigen::Vector2d(0.1, 0.8);
+  const rangenav::CorrelativeScanMatcher<double> matcher(model);
+  rangenav::CorrelativeScanMatcherParams<double> flat;
+  flat.levels = 1;
+  const rangenav::CorrelativeScanMatcher<double> exhaustive(model, flat);
+  const auto error_m = [&](const Transform2d& pose) {
+    return (truth.inverse(Eigen::Isometry) * pose).translation().norm();
+  };
+
+  // ±0.3 m in x, ±1 m in y holds the truth: found, as the exhaustive search finds it.
+  const rangenav::SearchWindow<double> tall{0.3, 0.1, 1.0};
+  const auto found = matcher.match(data, initial, tall, 0.3);
+  const auto brute = exhaustive.match(data, initial, tall, 0.3);
+  REQUIRE(found);
+  REQUIRE(brute);
+  CHECK(error_m(found->pose) < 0.1);
+  CHECK(found->score == Approx(brute->score).epsilon(1e-5));
+
+  // ±1 m in x, ±0.3 m in y does not: every pose it returns lies within the rectangle, away from
+  // the truth, and scores below the true pose's best.
+  const rangenav::SearchWindow<double> wide{1.0, 0.1, 0.3};
+  const auto other = matcher.match(data, initial, wide, 0.0);
+  const auto other_brute = exhaustive.match(data, initial, wide, 0.0);
+  REQUIRE(other);
+  REQUIRE(other_brute);
+  const Eigen::Vector2d offset = other->pose.translation() - initial.translation();
+  CHECK(std::abs(offset.x()) <= 1.0 + 1e-9);
+  CHECK(std::abs(offset.y()) <= 0.3 + 1e-9);
+  CHECK(error_m(other->pose) > 0.4);
+  CHECK(other->score < found->score);
+  CHECK(other->score == Approx(other_brute->score).epsilon(1e-5));
+
+  // Without linear_y the window is the square ±linear.
+  const auto square = matcher.match(data, initial, rangenav::SearchWindow<double>{1.0, 0.1}, 0.3);
+  REQUIRE(square);
+  CHECK(error_m(square->pose) < 0.1);
+}
+
 TEST_CASE("CorrelativeScanMatcher refuses a model too wide for its memory bound and clips windows",
           "[mapping][slam]") {
   const auto [model, data, truth] = ring_corridor_pair();

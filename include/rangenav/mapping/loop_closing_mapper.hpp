@@ -18,7 +18,8 @@
 //                the submap's key frames lies within the search window plus `overlap_distance`
 //                of it; the window is `window_sigmas` standard deviations of the uncertainty
 //                accumulated since the last loop constraint (the key-frame steps' covariances
-//                propagated by the SE(D) adjoint), so it grows with the distance driven;
+//                propagated by the SE(D) adjoint), so it grows with the distance driven; the
+//                2D matcher searches the bounding box of its ellipse in the submap's frame;
 //   matching     2D: the branch-and-bound correlative matcher (correlative_scan_matcher.hpp)
 //                searches the window for the best pose of the key frame's scan in the submap
 //                (Hess et al. §V), rejected below `min_score` and when a second, distinct pose
@@ -481,6 +482,26 @@ class LoopClosingMapper {
     return w;
   }
 
+  // The window's translations as the matcher searches them, in the submap's frame: the key
+  // frame's position error is R δ_t (δ the body-frame perturbation, R its predicted rotation in
+  // the submap), of covariance R Σ_tt Rᵀ there; the bounding box of that ellipse at
+  // `window_sigmas` is ±window_sigmas √(R Σ_tt Rᵀ)_ii per axis, never wider than the square of
+  // its largest axis that search_window() gives, and much narrower along a corridor's width.
+  SearchWindow<Scalar> box_window(const SearchWindow<Scalar>& window,
+                                  const transform_type& predicted) const {
+    const Eigen::Matrix<Scalar, 2, 2> r = predicted.linear();
+    const Eigen::Matrix<Scalar, 2, 2> c =
+        r * accumulated_.template topLeftCorner<2, 2>() * r.transpose();
+    const auto half_width = [&](Scalar variance) {
+      return std::clamp(loops_.window_sigmas * std::sqrt(std::max(Scalar(0), variance)),
+                        loops_.min_window_linear, loops_.max_window_linear);
+    };
+    SearchWindow<Scalar> box = window;
+    box.linear = half_width(c(0, 0));
+    box.linear_y = half_width(c(1, 1));
+    return box;
+  }
+
   std::optional<LoopClosure<D, Scalar>> verify(std::size_t submap, std::size_t k,
                                                const SearchWindow<Scalar>& window) {
     Submap& s = submaps_[submap];
@@ -498,9 +519,9 @@ class LoopClosingMapper {
         release_matchers();
       }
       // Olson's ambiguity test: no distinct pose may score nearly as well.
-      const auto [best, second] =
-          s.matcher->match_with_runner_up(node.points, predicted, window, loops_.min_score,
-                                          loops_.ambiguity_ratio, loops_.ambiguity_distance);
+      const auto [best, second] = s.matcher->match_with_runner_up(
+          node.points, predicted, box_window(window, predicted), loops_.min_score,
+          loops_.ambiguity_ratio, loops_.ambiguity_distance);
       if (!best) {
         ++stats_.low_score;
         return std::nullopt;

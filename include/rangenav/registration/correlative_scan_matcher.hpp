@@ -78,11 +78,21 @@ struct CorrelativeScanMatcherParams {
   }
 };
 
-/// The region searched around an initial pose: ±linear in x and y (m), ±angular (rad).
+/// The region searched around an initial pose: ±linear in x and y (m), ±angular (rad); a
+/// rectangle when `linear_y` is set (±linear in x, ±linear_y in y, both in the model frame),
+/// e.g. the bounding box of an elongated position uncertainty.
 template <std::floating_point Scalar = double>
 struct SearchWindow {
-  Scalar linear = Scalar(1);     ///< m, half-width in x and in y
-  Scalar angular = Scalar(0.5);  ///< rad, half-width in θ
+  /// ±1 m, ±0.5 rad.
+  constexpr SearchWindow() = default;
+  /// ±half_width in x and y (±half_height in y when given), ±half_angle.
+  constexpr SearchWindow(Scalar half_width, Scalar half_angle,
+                         std::optional<Scalar> half_height = std::nullopt)
+      : linear(half_width), angular(half_angle), linear_y(half_height) {}
+
+  Scalar linear = Scalar(1);       ///< m, half-width in x (and in y unless linear_y is set)
+  Scalar angular = Scalar(0.5);    ///< rad, half-width in θ
+  std::optional<Scalar> linear_y;  ///< m, half-width in y when it differs from x's
 };
 
 /// A region of translations a search leaves out: those within `radius` (m) of `center`'s.
@@ -264,8 +274,9 @@ class CorrelativeScanMatcher {
                const SearchWindow<Scalar>& window) const {
     const Scalar r = params_.resolution;
     thin(scan);
+    const Scalar linear_y = window.linear_y.value_or(window.linear);
     if (points_.empty() || !initial.matrix().allFinite() || !(window.linear >= 0) ||
-        !(window.angular >= 0))
+        !(linear_y >= 0) || !(window.angular >= 0))
       return false;
     // Eq. (7) with d_max the 90 % quantile of the points' ranges instead of the farthest: one
     // far reading would otherwise set the step for all, while a step moves 90 % of the points
@@ -292,6 +303,7 @@ class CorrelativeScanMatcher {
         std::ceil(((t0_ - origin_).template lpNorm<Eigen::Infinity>() + d_far) / r) + 1;
     const Scalar reachable = near + Scalar(std::max(width_, height_) + pad_ + 1);
     wx_ = static_cast<int>(std::min({std::ceil(window.linear / r), reachable, Scalar(1 << 20)}));
+    wy_ = static_cast<int>(std::min({std::ceil(linear_y / r), reachable, Scalar(1 << 20)}));
 
     // Per angle, the scan's cells split by what the window's offsets [-w, w] do to them: a cell
     // outside the grid for every offset adds 0 to every bound and is dropped; one inside for
@@ -310,13 +322,13 @@ class CorrelativeScanMatcher {
         const point_type& p = points_[k];
         const Scalar x = c * p.x() - s * p.y() + t0_.x(), y = s * p.x() + c * p.y() + t0_.y();
         const Scalar fx = std::floor((x - origin_.x()) / r), fy = std::floor((y - origin_.y()) / r);
-        const Scalar w = Scalar(wx_);
-        if (fx + w < Scalar(-pad_) || fy + w < Scalar(-pad_) || fx - w >= Scalar(width_) ||
-            fy - w >= Scalar(height_))
+        const Scalar w = Scalar(wx_), h = Scalar(wy_);
+        if (fx + w < Scalar(-pad_) || fy + h < Scalar(-pad_) || fx - w >= Scalar(width_) ||
+            fy - h >= Scalar(height_))
           continue;  // never on the grid (also keeps the casts below in range)
         const Cell cell{static_cast<int>(fx), static_cast<int>(fy)};
-        if (cell.x - wx_ >= -pad_ && cell.y - wx_ >= -pad_ && cell.x + wx_ < width_ &&
-            cell.y + wx_ < height_)
+        if (cell.x - wx_ >= -pad_ && cell.y - wy_ >= -pad_ && cell.x + wx_ < width_ &&
+            cell.y + wy_ < height_)
           inside_.push_back(static_cast<std::ptrdiff_t>(index(cell.x, cell.y)));
         else
           border_.push_back(cell);
@@ -330,7 +342,7 @@ class CorrelativeScanMatcher {
     roots_.clear();
     for (int a = -angles_; a <= angles_; ++a)
       for (int x = -wx_; x <= wx_; x += 1 << top)
-        for (int y = -wx_; y <= wx_; y += 1 << top)
+        for (int y = -wy_; y <= wy_; y += 1 << top)
           roots_.push_back({a + angles_, x, y, score(top, a + angles_, x, y)});
     std::sort(roots_.begin(), roots_.end(), by_score);
     return true;
@@ -350,7 +362,7 @@ class CorrelativeScanMatcher {
     const Scalar threshold = std::clamp(min_score, Scalar(0), Scalar(1)) * n * Scalar(cell_max);
     Candidate best{0, 0, 0, static_cast<Sum>(std::floor(threshold))};
     bool found = false;
-    search(roots_, params_.levels - 1, wx_, best, found);
+    search(roots_, params_.levels - 1, best, found);
     if (!found) return std::nullopt;
     CorrelativeMatch<Scalar> m;
     const Scalar theta = theta0_ + Scalar(best.angle - angles_) * step_;
@@ -398,14 +410,13 @@ class CorrelativeScanMatcher {
     return sum;
   }
   // Algorithm 3 (depth-first branch and bound, best child first).
-  void search(const std::vector<Candidate>& candidates, int h, int w, Candidate& best,
-              bool& found) const {
+  void search(const std::vector<Candidate>& candidates, int h, Candidate& best, bool& found) const {
     for (const Candidate& c : candidates) {
       if (c.score <= best.score) break;  // sorted: nothing later can beat the best
-      expand(c, h, w, best, found);
+      expand(c, h, best, found);
     }
   }
-  void expand(const Candidate& c, int h, int w, Candidate& best, bool& found) const {
+  void expand(const Candidate& c, int h, Candidate& best, bool& found) const {
     if (excluded(c, h)) return;
     if (h == 0) {
       best = c;
@@ -416,7 +427,7 @@ class CorrelativeScanMatcher {
     // Children beyond the window stay at 0 and sort last (best.score >= 0 stops the loop first).
     std::array<Candidate, 4> children;
     children.fill({c.angle, c.x, c.y, 0});
-    if (c.x + s <= w && c.y + s <= w) {
+    if (c.x + s <= wx_ && c.y + s <= wy_) {
       const std::array<Sum, 4> scores = score_children(h - 1, c.angle, c.x, c.y, s);
       for (int i = 0; i < 4; ++i)
         children[static_cast<std::size_t>(i)] = {c.angle, c.x + (i >> 1) * s, c.y + (i & 1) * s,
@@ -425,7 +436,7 @@ class CorrelativeScanMatcher {
       for (int dx = 0; dx < 2; ++dx)
         for (int dy = 0; dy < 2; ++dy) {
           const int x = c.x + dx * s, y = c.y + dy * s;
-          if (x > w || y > w) continue;
+          if (x > wx_ || y > wy_) continue;
           children[static_cast<std::size_t>(2 * dx + dy)] = {c.angle, x, y,
                                                              score(h - 1, c.angle, x, y)};
         }
@@ -433,7 +444,7 @@ class CorrelativeScanMatcher {
     std::sort(children.begin(), children.end(), by_score);
     for (std::size_t i = 0; i < children.size(); ++i) {
       if (children[i].score <= best.score) break;
-      expand(children[i], h - 1, w, best, found);
+      expand(children[i], h - 1, best, found);
     }
   }
   // Whether every translation of node c (height h) lies in the exclusion: the farthest corner
@@ -481,7 +492,7 @@ class CorrelativeScanMatcher {
   mutable std::vector<Candidate> roots_;
   mutable Scalar step_ = 0, theta0_ = 0;
   mutable point_type t0_ = point_type::Zero();
-  mutable int angles_ = 0, wx_ = 0;
+  mutable int angles_ = 0, wx_ = 0, wy_ = 0;
   mutable std::optional<SearchExclusion<Scalar>> exclusion_;  ///< in cell offsets
 };
 
