@@ -179,6 +179,36 @@ TEST_CASE("CorrelativeScanMatcher searches a rectangular window", "[mapping][sla
   CHECK(error_m(square->pose) < 0.1);
 }
 
+TEST_CASE("uncertainty_window is the bounding box of the uncertainty ellipse", "[mapping][slam]") {
+  // σ = 2 m along an axis at 30° to the frame's x axis, 0.5 m across it.
+  const double angle = std::numbers::pi / 6;
+  const Eigen::Matrix2d r = Eigen::Rotation2Dd(angle).toRotationMatrix();
+  const Eigen::Matrix2d c = r * Eigen::Vector2d(4.0, 0.25).asDiagonal() * r.transpose();
+  const auto w = rangenav::uncertainty_window<double>(c, 3.0, 0.2, 0.1, 100.0);
+  // Closed form: C_xx = 4 cos² + 0.25 sin² = 3.0625, C_yy = 4 sin² + 0.25 cos² = 1.1875.
+  CHECK(w.linear == Approx(3.0 * 1.75));
+  REQUIRE(w.linear_y);
+  CHECK(*w.linear_y == Approx(3.0 * std::sqrt(1.1875)));
+  CHECK(w.angular == 0.2);
+  // The 3σ ellipse x = 3 R diag(2, 0.5) (cos t, sin t) lies in the box and touches each side.
+  double max_x = 0, max_y = 0;
+  for (int i = 0; i < 3600; ++i) {
+    const double t = 2 * std::numbers::pi * i / 3600;
+    const Eigen::Vector2d x = 3.0 * r * Eigen::Vector2d(2.0 * std::cos(t), 0.5 * std::sin(t));
+    max_x = std::max(max_x, std::abs(x.x()));
+    max_y = std::max(max_y, std::abs(x.y()));
+  }
+  CHECK(max_x <= w.linear + 1e-9);
+  CHECK(max_y <= *w.linear_y + 1e-9);
+  CHECK(max_x == Approx(w.linear).epsilon(1e-5));
+  CHECK(max_y == Approx(*w.linear_y).epsilon(1e-5));
+  // Never wider than the square of the longest axis (3 × 2 m); clamped to the bounds given.
+  CHECK(w.linear < 6.0);
+  const auto clamped = rangenav::uncertainty_window<double>(c, 3.0, 0.2, 4.0, 5.0);
+  CHECK(clamped.linear == 5.0);
+  CHECK(*clamped.linear_y == 4.0);
+}
+
 TEST_CASE("CorrelativeScanMatcher refuses a model too wide for its memory bound and clips windows",
           "[mapping][slam]") {
   const auto [model, data, truth] = ring_corridor_pair();

@@ -484,22 +484,14 @@ class LoopClosingMapper {
 
   // The window's translations as the matcher searches them, in the submap's frame: the key
   // frame's position error is R δ_t (δ the body-frame perturbation, R its predicted rotation in
-  // the submap), of covariance R Σ_tt Rᵀ there; the bounding box of that ellipse at
-  // `window_sigmas` is ±window_sigmas √(R Σ_tt Rᵀ)_ii per axis, never wider than the square of
-  // its largest axis that search_window() gives, and much narrower along a corridor's width.
+  // the submap), of covariance R Σ_tt Rᵀ there; the matcher searches the bounding box of its
+  // ellipse (uncertainty_window), much narrower than search_window()'s square along a corridor.
   SearchWindow<Scalar> box_window(const SearchWindow<Scalar>& window,
                                   const transform_type& predicted) const {
     const Eigen::Matrix<Scalar, 2, 2> r = predicted.linear();
-    const Eigen::Matrix<Scalar, 2, 2> c =
-        r * accumulated_.template topLeftCorner<2, 2>() * r.transpose();
-    const auto half_width = [&](Scalar variance) {
-      return std::clamp(loops_.window_sigmas * std::sqrt(std::max(Scalar(0), variance)),
-                        loops_.min_window_linear, loops_.max_window_linear);
-    };
-    SearchWindow<Scalar> box = window;
-    box.linear = half_width(c(0, 0));
-    box.linear_y = half_width(c(1, 1));
-    return box;
+    return uncertainty_window<Scalar>(
+        r * accumulated_.template topLeftCorner<2, 2>() * r.transpose(), loops_.window_sigmas,
+        window.angular, loops_.min_window_linear, loops_.max_window_linear);
   }
 
   std::optional<LoopClosure<D, Scalar>> verify(std::size_t submap, std::size_t k,

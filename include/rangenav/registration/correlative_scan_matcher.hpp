@@ -95,6 +95,22 @@ struct SearchWindow {
   std::optional<Scalar> linear_y;  ///< m, half-width in y when it differs from x's
 };
 
+/// The window that holds `sigmas` standard deviations of a position uncertainty: the bounding box
+/// of the ellipse xᵀ C⁻¹ x = sigmas², C the covariance of the position in the model frame (m²),
+/// is ±sigmas √C_xx by ±sigmas √C_yy (each half-width clamped to [min_linear, max_linear]);
+/// ±angular (rad). Never wider than the square ±sigmas √λ_max of the ellipse's longest axis,
+/// and much narrower across an elongated ellipse aligned with the frame.
+template <std::floating_point Scalar>
+[[nodiscard]] SearchWindow<Scalar> uncertainty_window(
+    const Eigen::Matrix<Scalar, 2, 2>& position_covariance, Scalar sigmas, Scalar angular,
+    Scalar min_linear, Scalar max_linear) {
+  const auto half_width = [&](Scalar variance) {
+    return std::clamp(sigmas * std::sqrt(std::max(Scalar(0), variance)), min_linear, max_linear);
+  };
+  return SearchWindow<Scalar>(half_width(position_covariance(0, 0)), angular,
+                              half_width(position_covariance(1, 1)));
+}
+
 /// A region of translations a search leaves out: those within `radius` (m) of `center`'s.
 template <std::floating_point Scalar = double>
 struct SearchExclusion {
