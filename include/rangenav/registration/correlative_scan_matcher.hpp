@@ -321,10 +321,10 @@ class CorrelativeScanMatcher {
     wx_ = static_cast<int>(std::min({std::ceil(window.linear / r), reachable, Scalar(1 << 20)}));
     wy_ = static_cast<int>(std::min({std::ceil(linear_y / r), reachable, Scalar(1 << 20)}));
 
-    // Per angle, the scan's cells split by what the window's offsets [-w, w] do to them: a cell
-    // outside the grid for every offset adds 0 to every bound and is dropped; one inside for
-    // every offset is kept as its linear index (no bounds test in the search's inner loop);
-    // the rest are tested per node.
+    // Per angle, the scan's cells split by what the window's offsets ([-wx, wx] × [-wy, wy]
+    // cells) do to them: a cell outside the grid for every offset adds 0 to every bound and is
+    // dropped; one inside for every offset is kept as its linear index (no bounds test in the
+    // search's inner loop); the rest are tested per node.
     const std::size_t n = points_.size();
     const auto angle_count = static_cast<std::size_t>(2 * angles_ + 1);
     inside_.clear();
