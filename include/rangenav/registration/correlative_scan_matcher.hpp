@@ -318,8 +318,12 @@ class CorrelativeScanMatcher {
     const Scalar near =
         std::ceil(((t0_ - origin_).template lpNorm<Eigen::Infinity>() + d_far) / r) + 1;
     const Scalar reachable = near + Scalar(std::max(width_, height_) + pad_ + 1);
-    wx_ = static_cast<int>(std::min({std::ceil(window.linear / r), reachable, Scalar(1 << 20)}));
-    wy_ = static_cast<int>(std::min({std::ceil(linear_y / r), reachable, Scalar(1 << 20)}));
+    const auto cells = [&](Scalar half_width) {
+      return static_cast<int>(std::min({std::ceil(half_width / r), reachable, Scalar(1 << 20)}));
+    };
+    wx_ = cells(window.linear);
+    wy_ = cells(linear_y);
+    const Scalar w = Scalar(wx_), h = Scalar(wy_);
 
     // Per angle, the scan's cells split by what the window's offsets ([-wx, wx] × [-wy, wy]
     // cells) do to them: a cell outside the grid for every offset adds 0 to every bound and is
@@ -338,7 +342,6 @@ class CorrelativeScanMatcher {
         const point_type& p = points_[k];
         const Scalar x = c * p.x() - s * p.y() + t0_.x(), y = s * p.x() + c * p.y() + t0_.y();
         const Scalar fx = std::floor((x - origin_.x()) / r), fy = std::floor((y - origin_.y()) / r);
-        const Scalar w = Scalar(wx_), h = Scalar(wy_);
         if (fx + w < Scalar(-pad_) || fy + h < Scalar(-pad_) || fx - w >= Scalar(width_) ||
             fy - h >= Scalar(height_))
           continue;  // never on the grid (also keeps the casts below in range)
