@@ -7,10 +7,23 @@ trajectory can score below. With --trajectory (lines "timestamp x y theta", as w
 examples/03_slam_carmen --out) the trajectory's translational relation errors are also split
 into the relations on a triangle inconsistent beyond --threshold and the rest.
 
-  benchmarks/relations_consistency.py RELATIONS [--trajectory FILE] [--threshold M] [--worst N]
+With --log (the CARMEN log the relations were made for, FLASER records, plain or .gz), the
+short relations (< 2 s) are compared with the log's odometry between the same two scans: the
+correction the reference applied to the odometry, its share that is zero, and whether the
+corrections lie on a lattice (translation corrections whose norms are h * sqrt(i^2 + j^2) for
+integers i, j; yaw corrections offset + k * step). A reference that is the lattice point nearest
+the truth is off by up to half a step per axis, so an error-free trajectory scores about
+0.383 h on those relations (the mean distance of a uniform point of an h x h square from its
+centre). With --trajectory as well, its errors are split into the relations whose translation
+is the odometry's and the rest.
+
+  benchmarks/relations_consistency.py RELATIONS [--trajectory FILE] [--log LOG] [--threshold M]
+                                      [--worst N]
 """
 import argparse
 import bisect
+import collections
+import gzip
 import math
 import statistics
 
@@ -41,27 +54,131 @@ def read_trajectory(path):
     return poses
 
 
+def has_pose(times, t, tolerance=1e-3):
+    i = bisect.bisect_left(times, t)
+    return any(abs(times[j] - t) <= tolerance for j in (i - 1, i) if 0 <= j < len(times))
+
+
 def nearest(poses, times, t):
     i = bisect.bisect_left(times, t)
     best = min((j for j in (i - 1, i) if 0 <= j < len(times)), key=lambda j: abs(times[j] - t))
     return poses[times[best]]
 
 
-def relation_error(poses, times, a, b, r):
-    pa, pb = nearest(poses, times, float(a)), nearest(poses, times, float(b))
+def between(pa, pb):
+    """pb in the frame of pa."""
     c, s = math.cos(pa[2]), math.sin(pa[2])
     dx, dy = pb[0] - pa[0], pb[1] - pa[1]
-    return math.hypot(c * dx + s * dy - r[0], -s * dx + c * dy - r[1])
+    return (c * dx + s * dy, -s * dx + c * dy, math.remainder(pb[2] - pa[2], 2 * math.pi))
+
+
+def relation_error(poses, times, a, b, r):
+    e = between(nearest(poses, times, float(a)), nearest(poses, times, float(b)))
+    return math.hypot(e[0] - r[0], e[1] - r[1])
+
+
+def read_flaser_odometry(path):
+    """{ipc_timestamp: (x, y, theta)} of the FLASER records (the laser's odometry pose)."""
+    poses = {}
+    with (gzip.open(path, 'rt') if path.endswith('.gz') else open(path)) as f:
+        for line in f:
+            v = line.split()
+            if len(v) < 2 or v[0] != 'FLASER':
+                continue
+            n = int(v[1])
+            if len(v) >= n + 9:
+                poses[float(v[n + 8])] = tuple(map(float, v[n + 2:n + 5]))
+    return poses
+
+
+# The mean distance of a uniform point of a unit square from its centre, (sqrt(2) + asinh(1)) / 6.
+SQUARE_MEAN_DISTANCE = (math.sqrt(2) + math.asinh(1)) / 6
+
+
+def on_lattice(value, step, offset=0.0, tolerance=0.02):
+    k = (value - offset) / step
+    return abs(k - round(k)) < tolerance
+
+
+def on_square_lattice(norm, h, tolerance=0.04):
+    """Is norm the length of a vector (i h, j h) for integers i, j?"""
+    n2 = (norm / h) ** 2
+    if abs(n2 - round(n2)) >= tolerance:
+        return False
+    n = round(n2)
+    return any(math.isqrt(n - i * i) ** 2 == n - i * i for i in range(math.isqrt(n) + 1))
+
+
+def odometry_corrections(rel, odometry):
+    """The short relations against the log's odometry (see the module's docstring)."""
+    times = sorted(odometry)
+    found = []
+    for a, b, r in rel:
+        ta, tb = float(a), float(b)
+        if tb - ta >= 2:
+            continue
+        if not (has_pose(times, ta) and has_pose(times, tb)):
+            continue
+        o = between(nearest(odometry, times, ta), nearest(odometry, times, tb))
+        found.append((a, b, r, math.hypot(r[0] - o[0], r[1] - o[1]),
+                      math.remainder(r[2] - o[2], 2 * math.pi)))
+    if not found:
+        print('no short relation has both timestamps in the log')
+        return
+    equal = [f for f in found if f[3] < 1e-4]
+    moved = [f[3] for f in found if f[3] >= 1e-4]
+    print('%d short relations against the log\'s odometry: %d with its translation (within 0.1 mm)'
+          % (len(found), len(equal)))
+    if moved:
+        norms = collections.Counter(round(d, 3) for d in moved)
+        print('  translation corrections (m: count): ' +
+              ', '.join('%.3f: %d' % kv for kv in sorted(norms.items())[:12]))
+        h = norms.most_common(1)[0][0]  # the lattice's step is its most common norm
+        lattice = sum(on_square_lattice(d, h) for d in moved)
+        print('  %d of %d corrections on the lattice of h = %.4f m (norm = h sqrt(i^2 + j^2)). If '
+              'the reference is the lattice point nearest the truth, an error-free trajectory '
+              'scores about %.4f m on these %d relations' % (lattice, len(moved), h, SQUARE_MEAN_DISTANCE * h,
+                                                             len(found)))
+    yaws = sorted(f[4] for f in found)
+    gaps = [q - p for p, q in zip(yaws, yaws[1:]) if q - p > 1e-4]
+    if gaps:
+        step = collections.Counter(round(g, 5) for g in gaps).most_common(1)[0][0]
+        offset = statistics.median(math.remainder(y, step) for y in yaws)
+        for reach in (4, 16, 64, math.inf):  # refine the step on ever farther lattice points
+            near = [(round((y - offset) / step), y - offset) for y in yaws
+                    if abs(y - offset) < reach * step]
+            if sum(k * k for k, _ in near) > 0:
+                step = sum(k * d for k, d in near) / sum(k * k for k, _ in near)
+        lattice = sum(on_lattice(y, step, offset) for y in yaws)
+        print('  yaw corrections: %d of %d on offset %.4f + k * %.5f rad (%.3f deg); the nearest '
+              'lattice point is off by %.3f deg on average'
+              % (lattice, len(yaws), offset, step, math.degrees(step), math.degrees(step) / 4))
+    return equal
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     ap.add_argument('relations')
     ap.add_argument('--trajectory')
+    ap.add_argument('--log', help='CARMEN log of the relations (FLASER records)')
     ap.add_argument('--threshold', type=float, default=0.08, help='m (default 0.08)')
     ap.add_argument('--worst', type=int, default=5)
     args = ap.parse_args()
     rel = read_relations(args.relations)
+    poses = read_trajectory(args.trajectory) if args.trajectory else None
+    if args.log:
+        equal = odometry_corrections(rel, read_flaser_odometry(args.log))
+        if poses and equal is not None:
+            keys = {(a, b) for a, b, *_ in equal}
+            times = sorted(poses)
+            groups = {True: [], False: []}
+            for a, b, r in rel:
+                if float(b) - float(a) < 2:
+                    groups[(a, b) in keys].append(relation_error(poses, times, a, b, r))
+            for k, name in ((True, 'the odometry\'s translation'), (False, 'a corrected one')):
+                if groups[k]:
+                    print('  trajectory on the short relations with %s: %d, mean error %.4f m'
+                          % (name, len(groups[k]), statistics.mean(groups[k])))
     lookup = {(a, b): r for a, b, r in rel}
     out = {}
     for a, b in lookup:
@@ -82,7 +199,6 @@ def main():
         print('  %.3f m  timestamps %s %s %s' % (e, a, b, c))
     if not args.trajectory:
         return
-    poses = read_trajectory(args.trajectory)
     times = sorted(poses)
     flagged = set()
     for e, a, b, c in triangles:
