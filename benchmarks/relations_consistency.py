@@ -124,7 +124,7 @@ def odometry_corrections(rel, odometry):
                       math.remainder(r[2] - o[2], 2 * math.pi)))
     if not found:
         print('no short relation has both timestamps in the log')
-        return
+        return set(), set()
     equal = [f for f in found if f[3] < 1e-4]
     moved = [f[3] for f in found if f[3] >= 1e-4]
     print('%d short relations against the log\'s odometry: %d with its translation (within 0.1 mm)'
@@ -137,13 +137,16 @@ def odometry_corrections(rel, odometry):
         lattice = sum(on_square_lattice(d, h) for d in moved)
         print('  %d of %d corrections on the lattice of h = %.4f m (norm = h sqrt(i^2 + j^2)). If '
               'the reference is the lattice point nearest the truth, an error-free trajectory '
-              'scores about %.4f m on these %d relations' % (lattice, len(moved), h, SQUARE_MEAN_DISTANCE * h,
-                                                             len(found)))
+              'scores about %.4f m on these %d relations'
+              % (lattice, len(moved), h, SQUARE_MEAN_DISTANCE * h, len(found)))
     yaws = sorted(f[4] for f in found)
     gaps = [q - p for p, q in zip(yaws, yaws[1:]) if q - p > 1e-4]
     if gaps:
         step = collections.Counter(round(g, 5) for g in gaps).most_common(1)[0][0]
-        offset = statistics.median(math.remainder(y, step) for y in yaws)
+        # The lattice's offset: the circular mean of the yaws' phases within a step.
+        phase = [2 * math.pi * y / step for y in yaws]
+        offset = step / (2 * math.pi) * math.atan2(sum(map(math.sin, phase)),
+                                                   sum(map(math.cos, phase)))
         for reach in (4, 16, 64, math.inf):  # refine the step on ever farther lattice points
             near = [(round((y - offset) / step), y - offset) for y in yaws
                     if abs(y - offset) < reach * step]
@@ -153,7 +156,7 @@ def odometry_corrections(rel, odometry):
         print('  yaw corrections: %d of %d on offset %.4f + k * %.5f rad (%.3f deg); the nearest '
               'lattice point is off by %.3f deg on average'
               % (lattice, len(yaws), offset, step, math.degrees(step), math.degrees(step) / 4))
-    return equal
+    return {(f[0], f[1]) for f in found}, {(f[0], f[1]) for f in equal}
 
 
 def main():
@@ -167,14 +170,13 @@ def main():
     rel = read_relations(args.relations)
     poses = read_trajectory(args.trajectory) if args.trajectory else None
     if args.log:
-        equal = odometry_corrections(rel, read_flaser_odometry(args.log))
-        if poses and equal is not None:
-            keys = {(a, b) for a, b, *_ in equal}
+        found, equal = odometry_corrections(rel, read_flaser_odometry(args.log))
+        if poses:
             times = sorted(poses)
             groups = {True: [], False: []}
             for a, b, r in rel:
-                if float(b) - float(a) < 2:
-                    groups[(a, b) in keys].append(relation_error(poses, times, a, b, r))
+                if (a, b) in found:
+                    groups[(a, b) in equal].append(relation_error(poses, times, a, b, r))
             for k, name in ((True, 'the odometry\'s translation'), (False, 'a corrected one')):
                 if groups[k]:
                     print('  trajectory on the short relations with %s: %d, mean error %.4f m'
