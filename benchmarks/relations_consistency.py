@@ -54,15 +54,11 @@ def read_trajectory(path):
     return poses
 
 
-def has_pose(times, t, tolerance=1e-3):
-    i = bisect.bisect_left(times, t)
-    return any(abs(times[j] - t) <= tolerance for j in (i - 1, i) if 0 <= j < len(times))
-
-
-def nearest(poses, times, t):
+def nearest(poses, times, t, tolerance=math.inf):
+    """The pose whose timestamp is nearest t; None when that is farther than tolerance."""
     i = bisect.bisect_left(times, t)
     best = min((j for j in (i - 1, i) if 0 <= j < len(times)), key=lambda j: abs(times[j] - t))
-    return poses[times[best]]
+    return poses[times[best]] if abs(times[best] - t) <= tolerance else None
 
 
 def between(pa, pb):
@@ -115,11 +111,10 @@ def odometry_corrections(rel, odometry):
     found = []
     for a, b, r in rel:
         ta, tb = float(a), float(b)
-        if tb - ta >= 2:
+        pa, pb = nearest(odometry, times, ta, 1e-3), nearest(odometry, times, tb, 1e-3)
+        if tb - ta >= 2 or pa is None or pb is None:
             continue
-        if not (has_pose(times, ta) and has_pose(times, tb)):
-            continue
-        o = between(nearest(odometry, times, ta), nearest(odometry, times, tb))
+        o = between(pa, pb)
         found.append((a, b, r, math.hypot(r[0] - o[0], r[1] - o[1]),
                       math.remainder(r[2] - o[2], 2 * math.pi)))
     if not found:
