@@ -164,10 +164,10 @@ def main():
     args = ap.parse_args()
     rel = read_relations(args.relations)
     poses = read_trajectory(args.trajectory) if args.trajectory else None
+    times = sorted(poses) if poses else []
     if args.log:
         found, equal = odometry_corrections(rel, read_flaser_odometry(args.log))
         if poses:
-            times = sorted(poses)
             groups = {True: [], False: []}
             for a, b, r in rel:
                 if (a, b) in found:
@@ -196,7 +196,6 @@ def main():
         print('  %.3f m  timestamps %s %s %s' % (e, a, b, c))
     if not args.trajectory:
         return
-    times = sorted(poses)
     flagged = set()
     for e, a, b, c in triangles:
         if e > args.threshold:
