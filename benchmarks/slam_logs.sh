@@ -4,7 +4,11 @@
 # drifting synthetic odometry; seeds 1-3, noise scale 1 and 2), mapped by 03_slam_carmen with its
 # defaults, and scored by ../shared/tools/eval_traj.py against the corrected poses.
 #
-#   benchmarks/slam_logs.sh [BUILD_DIR] [-- extra 03_slam_carmen flags]    (from the repo root)
+#   benchmarks/slam_logs.sh [BUILD_DIR] [--max-range R] [-- extra 03_slam_carmen flags]
+#                                                                          (from the repo root)
+#
+# --max-range R drops every return farther than R metres from the logs before mapping, as a
+# shorter-range scanner would see them (5.6 m: a Hokuyo URG-04LX's maximum range).
 #
 # Prints one row per run and the goals of issue 19: loop_m <= 0.10 m, consistency_mm <=
 # 1.05 x reference_consistency_mm, no non-finite pose. Needs python3; BUILD_DIR defaults to
@@ -13,6 +17,11 @@ set -euo pipefail
 
 build=${1:-build/release}
 shift || true
+max_range=""
+if [[ ${1:-} == "--max-range" ]]; then
+  max_range=${2:?--max-range needs a value in metres}
+  shift 2
+fi
 [[ ${1:-} == "--" ]] && shift
 extra=("$@")
 slam="$build/examples/03_slam_carmen"
@@ -33,6 +42,20 @@ for name in csail intel freiburg-101 freiburg-079; do
       base="$work/$name.$seed.$scale"
       python3 "$tools/noisy_log.py" "$src" "$base.log" "$base.truth" --seed "$seed" \
         --scale "$scale" >/dev/null
+      if [[ -n $max_range ]]; then
+        # FLASER n r_1 .. r_n ...: a return beyond the range becomes no return (0).
+        python3 - "$base.log" "$max_range" <<'EOF'
+import sys
+path, limit = sys.argv[1], float(sys.argv[2])
+lines = []
+for line in open(path):
+    t = line.split()
+    n = int(t[1])
+    t[2:2 + n] = [r if 0 < float(r) <= limit else "0" for r in t[2:2 + n]]
+    lines.append(" ".join(t) + "\n")
+open(path, "w").writelines(lines)
+EOF
+      fi
       json=$("$slam" "$base.log" --out "$base" "${extra[@]}" | tail -n 1)
       score=$(python3 "$tools/eval_traj.py" "$base.truth" "$base/trajectory.txt" --log "$base.log")
       row=$(python3 - "$json" "$score" "$name" "$seed" "$scale" <<'EOF'

@@ -296,12 +296,23 @@ class IncrementalMapper {
     }
     // Odometry that froze and then jumps (real logs have both) claims a motion the constant-
     // velocity prediction contradicts; such an increment is not fused (below).
-    bool odometry_consistent = true;
-    if (last_motion_) {
-      const transform_type diff = guess.inverse(Eigen::Isometry) * (pose_ * *last_motion_);
-      odometry_consistent = diff.translation().norm() <= params.hypothesis_distance &&
-                            std::abs(rotation_angle(diff)) <= params.hypothesis_angle;
-    }
+    // Whether a pose lies within hypothesis_distance / hypothesis_angle of the constant-velocity
+    // prediction (true before there is one).
+    const auto near_velocity_guess = [&](const transform_type& pose) {
+      if (!last_motion_) return true;
+      const transform_type diff = pose.inverse(Eigen::Isometry) * (pose_ * *last_motion_);
+      return diff.translation().norm() <= params.hypothesis_distance &&
+             std::abs(rotation_angle(diff)) <= params.hypothesis_angle;
+    };
+    const bool odometry_consistent = near_velocity_guess(guess);
+    // Whether a pose agrees with the odometry prediction: its χ² under the noise model is within
+    // odometry_gate_chi2 (always true without an odometry increment and a noise model).
+    const auto agrees = [&](const transform_type& pose) {
+      if (!has_increment || !odometry_information) return true;
+      const lie::PoseTangent<D, Scalar> e =
+          lie::se_log<D, Scalar>(update.initial_guess.inverse(Eigen::Isometry) * pose);
+      return e.dot(*odometry_information * e) <= params.odometry_gate_chi2;
+    };
     if (params.match_previous_scan) {
       if (previous_.size() >= std::size_t(10)) {
         const KdTree<D, Scalar> previous_tree(previous_);
@@ -313,15 +324,10 @@ class IncrementalMapper {
         // Odometry that froze and then jumps (CSAIL has both) makes the odometry guess wrong
         // by the whole frozen motion: when the constant-velocity guess differs, try it too and
         // keep the alignment that matches more points.
-        if (last_motion_) {
-          const transform_type velocity_guess = pose_ * *last_motion_;
-          const transform_type diff = guess.inverse(Eigen::Isometry) * velocity_guess;
-          if (diff.translation().norm() > params.hypothesis_distance ||
-              std::abs(rotation_angle(diff)) > params.hypothesis_angle) {
-            auto other = previous_scan_icp.align(previous_tree, finite_, velocity_guess);
-            if (usable_s2s(other) && (!usable_s2s(best) || other.fitness > best.fitness))
-              best = other;
-          }
+        if (!odometry_consistent) {
+          auto other = previous_scan_icp.align(previous_tree, finite_, pose_ * *last_motion_);
+          if (usable_s2s(other) && (!usable_s2s(best) || other.fitness > best.fitness))
+            best = other;
         }
         if (usable_s2s(best)) {
           guess = best.transform;
@@ -353,11 +359,6 @@ class IncrementalMapper {
       //    many points (odometry that froze agrees with neither a good match nor, at a better
       //    fitness, a bad one).
       if (has_increment && odometry_information) {
-        const auto agrees = [&](const transform_type& pose) {
-          const lie::PoseTangent<D, Scalar> e =
-              lie::se_log<D, Scalar>(update.initial_guess.inverse(Eigen::Isometry) * pose);
-          return e.dot(*odometry_information * e) <= params.odometry_gate_chi2;
-        };
         if (agrees(r.transform)) {
           if (!plausible && update.previous_scan_guess && !agrees(*update.previous_scan_guess))
             plausible = true;
@@ -407,7 +408,14 @@ class IncrementalMapper {
           if (cov.allFinite()) update.information = cov.inverse().eval();
         }
       }
-    } else if (update.previous_scan_guess) {
+    } else if (update.previous_scan_guess &&
+               (agrees(*update.previous_scan_guess) ||
+                (!odometry_consistent && near_velocity_guess(*update.previous_scan_guess)))) {
+      // The map registration failed: the scan-to-scan alignment stands in for it where a
+      // motion prediction confirms it, the odometry's noise model or, where the odometry froze
+      // or jumped, the constant-velocity prediction. Unconfirmed it is no evidence against the
+      // odometry (a scan with a handful of returns pairs anywhere, tens of degrees off), and
+      // the odometry prediction is kept.
       update.pose = *update.previous_scan_guess;
     }
     last_motion_ = pose_.inverse(Eigen::Isometry) * update.pose;
