@@ -294,8 +294,6 @@ class IncrementalMapper {
       ++scans_;
       return update;
     }
-    // Odometry that froze and then jumps (real logs have both) claims a motion the constant-
-    // velocity prediction contradicts; such an increment is not fused (below).
     // Whether a pose lies within hypothesis_distance / hypothesis_angle of the constant-velocity
     // prediction (true before there is one).
     const auto near_velocity_guess = [&](const transform_type& pose) {
@@ -304,6 +302,8 @@ class IncrementalMapper {
       return diff.translation().norm() <= params.hypothesis_distance &&
              std::abs(rotation_angle(diff)) <= params.hypothesis_angle;
     };
+    // Odometry that froze and then jumps (real logs have both) claims a motion the constant-
+    // velocity prediction contradicts; such an increment is not fused (below).
     const bool odometry_consistent = near_velocity_guess(guess);
     // Whether a pose agrees with the odometry prediction: its χ² under the noise model is within
     // odometry_gate_chi2 (always true without an odometry increment and a noise model).
