@@ -4,11 +4,14 @@
 # drifting synthetic odometry; seeds 1-3, noise scale 1 and 2), mapped by 03_slam_carmen with its
 # defaults, and scored by ../shared/tools/eval_traj.py against the corrected poses.
 #
-#   benchmarks/slam_logs.sh [BUILD_DIR] [--max-range R] [-- extra 03_slam_carmen flags]
-#                                                                          (from the repo root)
+#   benchmarks/slam_logs.sh [BUILD_DIR] [--max-range R] [--laps N]
+#                           [-- extra 03_slam_carmen flags]                (from the repo root)
 #
 # --max-range R drops every return farther than R metres from the logs before mapping, as a
 # shorter-range scanner would see them (5.6 m: a Hokuyo URG-04LX's maximum range).
+# --laps N plays each log N times, every second time backwards: the robot drives its route
+# there and back, reversing on the way back (its scanner keeps facing the same way on the
+# robot), and every place is revisited N - 1 times.
 #
 # Prints one row per run and the goals of issue 19: loop_m <= 0.10 m, consistency_mm <=
 # 1.05 x reference_consistency_mm, no non-finite pose. Needs python3; BUILD_DIR defaults to
@@ -18,10 +21,14 @@ set -euo pipefail
 build=${1:-build/release}
 shift || true
 max_range=""
-if [[ ${1:-} == "--max-range" ]]; then
-  max_range=${2:?--max-range needs a value in metres}
+laps=1
+while [[ ${1:-} == --max-range || ${1:-} == --laps ]]; do
+  case $1 in
+    --max-range) max_range=${2:?--max-range needs a value in metres} ;;
+    --laps) laps=${2:?--laps needs a count} ;;
+  esac
   shift 2
-fi
+done
 [[ ${1:-} == "--" ]] && shift
 extra=("$@")
 slam="$build/examples/03_slam_carmen"
@@ -37,10 +44,23 @@ fail=0
 for name in csail intel freiburg-101 freiburg-079; do
   src="$data/carmen_corrected/$name-corrected.log.gz"
   [[ -f $src ]] || { echo "missing $src" >&2; exit 1; }
+  input=$src
+  if ((laps > 1)); then
+    # The scans of the log, then the same backwards, and so on: N laps there and back.
+    input="$work/$name.laps.log"
+    python3 - "$src" "$input" "$laps" <<'EOF'
+import gzip, sys
+src, out, laps = sys.argv[1], sys.argv[2], int(sys.argv[3])
+scans = [line for line in gzip.open(src, "rt") if line.startswith("FLASER ")]
+with open(out, "w") as f:
+    for lap in range(laps):
+        f.writelines(scans if lap % 2 == 0 else scans[::-1])
+EOF
+  fi
   for scale in 1 2; do
     for seed in 1 2 3; do
       base="$work/$name.$seed.$scale"
-      python3 "$tools/noisy_log.py" "$src" "$base.log" "$base.truth" --seed "$seed" \
+      python3 "$tools/noisy_log.py" "$input" "$base.log" "$base.truth" --seed "$seed" \
         --scale "$scale" >/dev/null
       if [[ -n $max_range ]]; then
         # FLASER n r_1 .. r_n ...: a return beyond the range becomes no return (0).
