@@ -1,8 +1,8 @@
 // Loop-closing SLAM against simulator truth: the correlative matcher (exact branch and bound,
 // ambiguity), the front end's uncertainty, the odometry as witness between registrations that
-// disagree (freiburg-101's corrected poses) or where a short-range scan matches nothing, the
-// 2D loop closed with drifting odometry, a look-alike place rejected, an all-invalid stretch of
-// scans.
+// disagree (freiburg-101's corrected poses) or where a short-range scan matches nothing, a
+// robot reversing along its route (intel's corrected poses), the 2D loop closed with drifting
+// odometry, a look-alike place rejected, an all-invalid stretch of scans.
 
 #include <catch2/catch.hpp>
 
@@ -454,6 +454,42 @@ TEST_CASE("The laser front end keeps the odometry where a short-range scan match
   REQUIRE(fewest < 10);
   CHECK(worst_m < 0.2);
   CHECK(worst_deg < 3.0);
+}
+
+TEST_CASE("The laser front end follows a robot reversing along its route", "[mapping][slam]") {
+  // intel-corrected's 910 scans (about half a metre and up to tens of degrees apart) in reverse
+  // order, with their corrected poses (the truth) as odometry: the robot drives its route
+  // backwards, the scanner still facing the way the robot faces. Each new scan sees beside the
+  // robot what the previous one, ahead of it, had behind its field of view; aligned as the
+  // data, those points pair with the ends of the same walls. The front end alone (no loop
+  // closure) must drift no more than 1 % of the distance travelled, as it does forwards.
+  const auto path = rangenav::test::data_file_or_skip("carmen_corrected/intel-corrected.log.gz");
+  if (path.empty()) return;
+  auto lasers = rangenav::io::read_carmen_lasers(path);
+  REQUIRE(lasers.size() > 900);
+  const auto worst_drift = [&] {
+    auto params = rangenav::laser_slam_params<double>();
+    params.odometry_noise = rangenav::OdometryNoise<double>{};
+    rangenav::LaserSlamMapper<double> mapper(params);
+    const Pose2d first = *lasers[0].laser_pose;
+    double worst = 0;
+    for (const auto& laser : lasers) {
+      const Transform2d truth = rangenav::relative(first, *laser.laser_pose).to_isometry();
+      const auto u = mapper.process(laser.scan, laser.laser_pose->to_isometry());
+      worst = std::max(worst, (u.pose.translation() - truth.translation()).norm());
+    }
+    return worst;
+  };
+  double travelled = 0;
+  for (std::size_t i = 1; i < lasers.size(); ++i)
+    travelled += (lasers[i].laser_pose->position() - lasers[i - 1].laser_pose->position()).norm();
+  const double forwards = worst_drift();
+  std::reverse(lasers.begin(), lasers.end());
+  const double backwards = worst_drift();
+  INFO("travelled " << travelled << " m; worst drift forwards " << forwards << " m, backwards "
+                    << backwards << " m");
+  CHECK(forwards < 0.01 * travelled);
+  CHECK(backwards < 0.01 * travelled);
 }
 
 TEST_CASE("LoopClosingMapper keeps finite poses through a stretch of all-invalid scans",

@@ -13,7 +13,9 @@
 // Beyond the papers, for real 2D laser logs (see laser_slam_params() and LaserSlamMapper):
 //   - `match_previous_scan`: the scan is first aligned to the previous scan (dense, so the
 //     decaying threshold can start wide without pairing with distant map structure), and that
-//     result is the initial guess of the map registration;
+//     result is the initial guess of the map registration; where the robot reverses from
+//     where its scanner looks, the previous scan is aligned to the new one instead (the data
+//     must be the scan whose view the other covers);
 //   - with match_previous_scan, a constant-velocity guess is tried beside the odometry guess
 //     when they disagree (odometry that froze, then jumped);
 //   - an ICP whose solver takes model normals (PointToLineSolver) gets the map's normals;
@@ -315,17 +317,38 @@ class IncrementalMapper {
     };
     if (params.match_previous_scan) {
       if (previous_.size() >= std::size_t(10)) {
-        const KdTree<D, Scalar> previous_tree(previous_);
         const auto usable_s2s = [](const IcpResult<D, Scalar>& r) {
           return r.reason != IcpTermination::too_few_pairs &&
                  r.reason != IcpTermination::degenerate;
         };
-        auto best = previous_scan_icp.align(previous_tree, finite_, guess);
+        // ICP pairs every data point with a model point, so the data must be the scan whose
+        // view the other one covers. Driving towards where the scanner looks (the mean
+        // direction of the previous scan's returns), that is the new scan. Reversing, the new
+        // scan sees beside the robot what the previous one had behind it, and those points
+        // would pair with the ends of the same walls and pull the scan back along them: the
+        // previous scan is aligned to the new one instead, and the result inverted. Reversing
+        // means by more than the odometry's translation uncertainty (the distance its χ² gate
+        // accepts): a robot standing still jitters either way.
+        const Scalar backwards =
+            has_increment && odometry_information
+                ? std::sqrt(params.odometry_gate_chi2 / (*odometry_information)(0, 0))
+                : Scalar(0);
+        const bool reversing =
+            (pose_.inverse(Eigen::Isometry) * guess).translation().dot(previous_facing_) <
+            -backwards * previous_facing_.norm();
+        const KdTree<D, Scalar> model(reversing ? finite_ : previous_);
+        const auto align_to_previous = [&](const transform_type& at) {
+          if (!reversing) return previous_scan_icp.align(model, finite_, at);
+          auto r = previous_scan_icp.align(model, previous_, at.inverse(Eigen::Isometry));
+          r.transform = r.transform.inverse(Eigen::Isometry);
+          return r;
+        };
+        auto best = align_to_previous(guess);
         // Odometry that froze and then jumps (CSAIL has both) makes the odometry guess wrong
         // by the whole frozen motion: when the constant-velocity guess differs, try it too and
         // keep the alignment that matches more points.
         if (!odometry_consistent) {
-          auto other = previous_scan_icp.align(previous_tree, finite_, pose_ * *last_motion_);
+          auto other = align_to_previous(pose_ * *last_motion_);
           if (usable_s2s(other) && (!usable_s2s(best) || other.fitness > best.fitness))
             best = other;
         }
@@ -424,6 +447,10 @@ class IncrementalMapper {
       previous_.clear();
       for (const auto& p : finite_)
         previous_.push_back(pose_ * p);
+      // The way the scanner looks: the mean direction of its returns (robot frame).
+      previous_facing_.setZero();
+      for (const auto& p : finite_)
+        if (const Scalar range = p.norm(); range > Scalar(0)) previous_facing_ += p / range;
     }
     if (update.registration_accepted && key_frames_.update(pose_)) {
       update.inserted = insert_into_map(pose_);
@@ -510,11 +537,12 @@ class IncrementalMapper {
   std::optional<transform_type> last_odometry_;
   std::size_t scans_ = 0;
   std::vector<point_type> finite_;
-  std::vector<std::uint32_t> hints_;           ///< map point near each of finite_ (the ICP's)
-  std::vector<point_type> previous_;           ///< the previous scan in the map frame
-  std::optional<transform_type> last_motion_;  ///< pose change of the last scan
-  std::vector<Neighbor<Scalar>> knn_;          ///< scratch of information_of()
-  IcpType witness_icp_{};                      ///< the map registration from the odometry guess
+  std::vector<std::uint32_t> hints_;                 ///< map point near each of finite_ (the ICP's)
+  std::vector<point_type> previous_;                 ///< the previous scan in the map frame
+  point_type previous_facing_ = point_type::Zero();  ///< its returns' summed directions
+  std::optional<transform_type> last_motion_;        ///< pose change of the last scan
+  std::vector<Neighbor<Scalar>> knn_;                ///< scratch of information_of()
+  IcpType witness_icp_{};  ///< the map registration from the odometry guess
 };
 
 /// The map ICP of the 2D laser setup: point-to-line against the map's normals, decaying
