@@ -4,7 +4,7 @@
 # drifting synthetic odometry; seeds 1-3, noise scale 1 and 2), mapped by 03_slam_carmen with its
 # defaults, and scored by ../shared/tools/eval_traj.py against the corrected poses.
 #
-#   benchmarks/slam_logs.sh [BUILD_DIR] [--max-range R] [--laps N]
+#   benchmarks/slam_logs.sh [BUILD_DIR] [--max-range R] [--laps N] [--keep DIR]
 #                           [-- extra 03_slam_carmen flags]                (from the repo root)
 #
 # --max-range R drops every return farther than R metres from the logs before mapping, as a
@@ -12,6 +12,8 @@
 # --laps N plays each log N times, every second time backwards: the robot drives its route
 # there and back, reversing on the way back (its scanner keeps facing the same way on the
 # robot), and every place is revisited N - 1 times.
+# --keep DIR keeps every run's input log, its truth and the SLAM's output in DIR (named
+# LOG.SEED.SCALE.log, .truth and a folder), e.g. for tools/loop_closure_audit.
 #
 # Prints one row per run and the goals of issue 19: loop_m <= 0.10 m, consistency_mm <=
 # 1.05 x reference_consistency_mm, no non-finite pose. Needs python3; BUILD_DIR defaults to
@@ -22,10 +24,12 @@ build=${1:-build/release}
 shift || true
 max_range=""
 laps=1
-while [[ ${1:-} == --max-range || ${1:-} == --laps ]]; do
+keep=""
+while [[ ${1:-} == --max-range || ${1:-} == --laps || ${1:-} == --keep ]]; do
   case $1 in
     --max-range) max_range=${2:?--max-range needs a value in metres} ;;
     --laps) laps=${2:?--laps needs a count} ;;
+    --keep) keep=${2:?--keep needs a folder} ;;
   esac
   shift 2
 done
@@ -35,8 +39,13 @@ slam="$build/examples/03_slam_carmen"
 data=${RANGENAV_DATA_DIR:-../shared/data}
 tools=$(dirname "$data")/tools
 [[ -x $slam ]] || { echo "no $slam: cmake --build $build --target 03_slam_carmen" >&2; exit 1; }
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+if [[ -n $keep ]]; then
+  mkdir -p "$keep"
+  work=$keep
+else
+  work=$(mktemp -d)
+  trap 'rm -rf "$work"' EXIT
+fi
 
 printf '%-16s %4s %5s %6s %8s %9s %9s %6s %9s %6s %s\n' log seed scale scans loop_m \
   cons_mm ref_mm ratio nonfinite loops scans/s

@@ -1,0 +1,129 @@
+// loop_closure_audit: which loop closures of the 2D SLAM are wrong, on a log with ground truth.
+// It maps a CARMEN log with LaserSlam (the defaults of example 03) and checks every accepted loop
+// closure against the true poses: the edge says where key frame `node` lies relative to key
+// frame `from`; the truth says where it does. A closure off by more than --max-error-m or
+// --max-error-deg is printed with what the SLAM believed when it accepted it:
+//
+//   estimate     the pose graph's estimate before the scan, from `from` to the key frame before
+//                `node` (the new key frame has no estimate yet), against the truth: how far the
+//                SLAM had drifted from the place it was closing on;
+//   window σ     the uncertainty accumulated since the last loop constraint (the larger of
+//                the x and y σ, and the heading's σ): what the loop search allowed for.
+//
+// Meant for the hold-out inputs of benchmarks/slam_logs.sh, which ../shared/tools/noisy_log.py
+// writes as a log and its truth ("timestamp x y theta", matched to the scans by timestamp to
+// 0.1 ms); `benchmarks/slam_logs.sh build/release --keep DIR` keeps them in DIR, e.g.
+//
+//   loop_closure_audit DIR/freiburg-079.2.2.log DIR/freiburg-079.2.2.truth
+//
+//   loop_closure_audit LOG TRUTH [--max-error-m M] [--max-error-deg D]
+//
+//   --max-error-m M    translation error that makes a closure wrong (default 0.15 m)
+//   --max-error-deg D  rotation error that makes a closure wrong (default 2°)
+//
+// Prints one line per wrong closure and, last, one JSON line with the counts.
+
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <map>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rangenav/io/carmen.hpp"
+#include "rangenav/io/trajectory.hpp"
+#include "rangenav/mapping/loop_closing_mapper.hpp"
+
+namespace {
+
+using rangenav::Transform2d;
+
+double angle_deg(const Transform2d& t) {
+  return std::abs(rangenav::rotation_angle(t)) * 180 / std::numbers::pi;
+}
+
+long long stamp_key(double t) {
+  return std::llround(t * 1e4);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  if (argc < 3) {
+    std::fprintf(stderr,
+                 "usage: loop_closure_audit LOG TRUTH [--max-error-m M] [--max-error-deg D]\n");
+    return 2;
+  }
+  double max_error_m = 0.15, max_error_deg = 2;
+  for (int i = 3; i + 1 < argc; i += 2) {
+    const std::string arg = argv[i];
+    const double value = std::stod(argv[i + 1]);
+    if (arg == "--max-error-m")
+      max_error_m = value;
+    else if (arg == "--max-error-deg")
+      max_error_deg = value;
+    else {
+      std::fprintf(stderr, "loop_closure_audit: unknown option %s\n", arg.c_str());
+      return 2;
+    }
+  }
+
+  auto log = rangenav::io::read_carmen_scan_log(argv[1]);
+  std::map<long long, rangenav::Pose2d> truth_at;
+  for (const auto& p : rangenav::io::read_xytheta(argv[2]))
+    truth_at[stamp_key(p.timestamp)] = p.pose;
+
+  rangenav::LaserSlam<double> slam;
+  std::vector<std::optional<Transform2d>> truth_of_node;  // the true pose of each key frame
+  std::size_t checked = 0, wrong = 0, without_truth = 0;
+  for (std::size_t i = 0; i < log.records.size(); ++i) {
+    std::optional<Transform2d> odometry;
+    if (log.odometry[i]) odometry = log.odometry[i]->to_isometry();
+    const std::vector<Transform2d> before = slam.key_frame_poses();
+    const auto window = slam.accumulated_covariance();
+    const std::size_t closures_before = slam.loop_closures().size();
+    const auto update = slam.process(log.records[i].scan, odometry);
+    if (!update.node) continue;
+    const auto truth = truth_at.find(stamp_key(log.records[i].timestamp));
+    if (truth == truth_at.end()) {
+      ++without_truth;
+      truth_of_node.emplace_back();
+      continue;
+    }
+    truth_of_node.emplace_back(truth->second.to_isometry());
+    const auto& closures = slam.loop_closures();
+    for (std::size_t c = closures_before; c < closures.size(); ++c) {
+      const auto& closure = closures[c];
+      const std::size_t previous = closure.node - 1;
+      if (!truth_of_node[closure.from] || !truth_of_node[previous]) continue;
+      ++checked;
+      const Transform2d from = truth_of_node[closure.from]->inverse(Eigen::Isometry);
+      const Transform2d error =
+          (from * *truth_of_node[closure.node]).inverse(Eigen::Isometry) * closure.relative;
+      if (error.translation().norm() <= max_error_m && angle_deg(error) <= max_error_deg) continue;
+      ++wrong;
+      const Transform2d estimate_error =
+          (from * *truth_of_node[previous]).inverse(Eigen::Isometry) *
+          (before[closure.from].inverse(Eigen::Isometry) * before[previous]);
+      std::printf(
+          "scan %zu: key frame %zu on submap %zu at key frame %zu: off %.3f m %.2f deg "
+          "(score %.3f, fitness %.3f); estimate off %.3f m %.2f deg; window sigma %.3f m "
+          "%.2f deg\n",
+          i, closure.node, closure.submap, closure.from, error.translation().norm(),
+          angle_deg(error), closure.score, closure.fitness, estimate_error.translation().norm(),
+          angle_deg(estimate_error), std::sqrt(std::max(window(0, 0), window(1, 1))),
+          std::sqrt(window(2, 2)) * 180 / std::numbers::pi);
+    }
+  }
+  slam.finish();
+  std::printf(
+      "{\"scans\":%zu,\"key_frames\":%zu,\"loop_closures_checked\":%zu,\"wrong\":%zu,"
+      "\"key_frames_without_truth\":%zu}\n",
+      log.records.size(), slam.key_frames(), checked, wrong, without_truth);
+  return 0;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "loop_closure_audit: %s\n", e.what());
+  return 1;
+}
