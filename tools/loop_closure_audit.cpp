@@ -25,6 +25,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <map>
 #include <numbers>
@@ -51,23 +52,26 @@ long long stamp_key(double t) {
 }  // namespace
 
 int main(int argc, char** argv) try {
-  if (argc < 3) {
-    std::fprintf(stderr,
-                 "usage: loop_closure_audit LOG TRUTH [--max-error-m M] [--max-error-deg D]\n");
+  constexpr const char* usage =
+      "usage: loop_closure_audit LOG TRUTH [--max-error-m M] [--max-error-deg D]\n";
+  if (argc < 3 || argc % 2 == 0) {
+    std::fputs(usage, stderr);
     return 2;
   }
   double max_error_m = 0.15, max_error_deg = 2;
   for (int i = 3; i + 1 < argc; i += 2) {
     const std::string arg = argv[i];
-    const double value = std::stod(argv[i + 1]);
-    if (arg == "--max-error-m")
-      max_error_m = value;
-    else if (arg == "--max-error-deg")
-      max_error_deg = value;
-    else {
-      std::fprintf(stderr, "loop_closure_audit: unknown option %s\n", arg.c_str());
+    double* target = arg == "--max-error-m"     ? &max_error_m
+                     : arg == "--max-error-deg" ? &max_error_deg
+                                                : nullptr;
+    char* end = nullptr;
+    const double value = std::strtod(argv[i + 1], &end);
+    if (target == nullptr || end == argv[i + 1] || *end != '\0' || !(value >= 0)) {
+      std::fprintf(stderr, "loop_closure_audit: bad option %s %s (a threshold >= 0)\n%s", argv[i],
+                   argv[i + 1], usage);
       return 2;
     }
+    *target = value;
   }
 
   auto log = rangenav::io::read_carmen_scan_log(argv[1]);
