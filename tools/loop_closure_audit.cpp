@@ -82,13 +82,19 @@ int main(int argc, char** argv) try {
   rangenav::LaserSlam<double> slam;
   std::vector<std::optional<Transform2d>> truth_of_node;  // the true pose of each key frame
   std::size_t checked = 0, wrong = 0, without_truth = 0;
+  // The key frames' estimate before the scan: it changes only with a new key frame or an
+  // optimisation, so it is copied then, not at every scan.
+  std::vector<Transform2d> estimate, before;
   for (std::size_t i = 0; i < log.records.size(); ++i) {
     std::optional<Transform2d> odometry;
     if (log.odometry[i]) odometry = log.odometry[i]->to_isometry();
-    const std::vector<Transform2d> before = slam.key_frame_poses();
     const auto window = slam.accumulated_covariance();
     const std::size_t closures_before = slam.loop_closures().size();
     const auto update = slam.process(log.records[i].scan, odometry);
+    if (update.node || update.optimized) {
+      before.swap(estimate);
+      estimate = slam.key_frame_poses();
+    }
     if (!update.node) continue;
     const auto truth = truth_at.find(stamp_key(log.records[i].timestamp));
     if (truth == truth_at.end()) {
