@@ -444,13 +444,14 @@ class IncrementalMapper {
     last_motion_ = pose_.inverse(Eigen::Isometry) * update.pose;
     pose_ = update.pose;
     if (params.match_previous_scan) {
+      // The scan in the map frame, and the way the scanner looks: the mean direction of its
+      // returns (robot frame).
       previous_.clear();
-      for (const auto& p : finite_)
-        previous_.push_back(pose_ * p);
-      // The way the scanner looks: the mean direction of its returns (robot frame).
       previous_facing_.setZero();
-      for (const auto& p : finite_)
+      for (const auto& p : finite_) {
+        previous_.push_back(pose_ * p);
         if (const Scalar range = p.norm(); range > Scalar(0)) previous_facing_ += p / range;
+      }
     }
     if (update.registration_accepted && key_frames_.update(pose_)) {
       update.inserted = insert_into_map(pose_);
