@@ -574,8 +574,9 @@ template <std::floating_point Scalar = double>
   // Only numerically singular directions stay at the start: the start is a relative estimate
   // (the scan-to-scan result), so holding a weakly observed direction there (a corridor with a
   // few door frames) adds its error at every scan, a random walk, while the map's weak
-  // constraint is absolute. Where odometry is fused, the reported information
-  // (icp.params.degeneracy_ratio, unchanged) still hands the weak directions to the odometry.
+  // constraint is absolute. Where odometry is fused, complete() (pose_uncertainty.hpp) still
+  // hands the odometry every direction the registration's information constrains less than
+  // the odometry's does.
   p.solver_degeneracy_ratio = Scalar(1e-6);
   p.solver_gauss_newton_steps = 10;
   return p;
