@@ -540,15 +540,10 @@ class IncrementalMapper {
     if constexpr (requires { icp.correspondences(); }) {
       const auto pairs = icp.correspondences();
       const lie::PoseMatrix<D, Scalar> full = full_information_of(pairs, transform);
-      if constexpr (requires { icp.params.degeneracy_ratio; }) {
-        detail::PointMoments<D, Scalar> points;
-        for (const auto& pr : pairs)
-          points.add(pr.data);
-        if (const auto scale = points.rotation_scale())
-          return detail::ObservedPart<D, Scalar>(full, points.centroid(), *scale,
-                                                 icp.params.degeneracy_ratio)
-              .matrix();
-      }
+      if constexpr (requires { icp.params.degeneracy_ratio; })
+        if (const auto observed =
+                detail::observed_part<D, Scalar>(full, pairs, icp.params.degeneracy_ratio))
+          return *observed;
       return full;
     } else {
       return lie::PoseMatrix<D, Scalar>::Zero();

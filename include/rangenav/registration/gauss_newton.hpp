@@ -161,6 +161,21 @@ struct ObservedPart {
   }
 };
 
+/// The observed part (ObservedPart with `ratio`) of h, a matrix over the tangent space such as
+/// the normal equations' Hessian at the solution, with the rotations scaled by the moments of the
+/// pairs' data points; nothing when those points do not spread.
+template <int D, class Scalar>
+[[nodiscard]] std::optional<PoseMatrix<D, Scalar>> observed_part(
+    const PoseMatrix<D, Scalar>& h, std::span<const Correspondence<D, Scalar>> pairs,
+    Scalar ratio) {
+  PointMoments<D, Scalar> points;
+  for (const auto& pr : pairs)
+    points.add(pr.data);
+  const auto scale = points.rotation_scale();
+  if (!scale) return std::nullopt;
+  return ObservedPart<D, Scalar>(h, points.centroid(), *scale, ratio).matrix();
+}
+
 /// The Gauss-Newton step d of the residuals' normal equations `eq` (unscaled), plus the prior's
 /// term at t when there is one. The residuals count only along the directions they observe
 /// (ObservedPart with `degeneracy_ratio`): a direction they leave free (the axis of a corridor)

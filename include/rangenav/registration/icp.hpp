@@ -557,15 +557,10 @@ class BasicIcp {
     const Scalar variance = eq.residual_variance();
     result.residual_variance = variance;
     PoseMatrix<D, Scalar> information = PoseMatrix<D, Scalar>::Zero();
-    detail::PointMoments<D, Scalar> points;
-    for (const auto& pr : pairs_)
-      points.add(pr.data);
-    const auto scale = points.rotation_scale();
-    if (variance > Scalar(0) && scale)
-      information = detail::ObservedPart<D, Scalar>(eq.hessian, points.centroid(), *scale,
-                                                    params.degeneracy_ratio)
-                        .matrix() /
-                    variance;
+    if (variance > Scalar(0))
+      if (const auto observed = detail::observed_part<D, Scalar>(
+              eq.hessian, std::span<const correspondence_type>(pairs_), params.degeneracy_ratio))
+        information = *observed / variance;
     result.information = information;
   }
 
