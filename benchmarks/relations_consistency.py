@@ -15,7 +15,8 @@ integers i, j; yaw corrections offset + k * step). A reference that is the latti
 the truth is off by up to half a step per axis, so an error-free trajectory scores about
 0.383 h on those relations (the mean distance of a uniform point of an h x h square from its
 centre). With --trajectory as well, its errors are split into the relations whose translation
-is the odometry's and the rest.
+is the odometry's and the rest, and on the rest it says where the trajectory lies between the
+relation (0 %) and the odometry (100 %).
 
   benchmarks/relations_consistency.py RELATIONS [--trajectory FILE] [--log LOG] [--threshold M]
                                       [--worst N]
@@ -116,10 +117,10 @@ def odometry_corrections(rel, odometry):
             continue
         o = between(pa, pb)
         found.append((a, b, r, math.hypot(r[0] - o[0], r[1] - o[1]),
-                      math.remainder(r[2] - o[2], 2 * math.pi)))
+                      math.remainder(r[2] - o[2], 2 * math.pi), o))
     if not found:
         print('no short relation has both timestamps in the log')
-        return set(), set()
+        return {}, set()
     equal = [f for f in found if f[3] < 1e-4]
     moved = [f[3] for f in found if f[3] >= 1e-4]
     print('%d short relations against the log\'s odometry: %d with its translation (within 0.1 mm)'
@@ -151,7 +152,15 @@ def odometry_corrections(rel, odometry):
         print('  yaw corrections: %d of %d on offset %.4f + k * %.5f rad (%.3f deg); the nearest '
               'lattice point is off by %.3f deg on average'
               % (lattice, len(yaws), offset, step, math.degrees(step), math.degrees(step) / 4))
-    return {(f[0], f[1]) for f in found}, {(f[0], f[1]) for f in equal}
+    return {(f[0], f[1]): f[5] for f in found}, {(f[0], f[1]) for f in equal}
+
+
+def share_towards(poses, times, a, b, r, o):
+    """Where the trajectory's translation lies between the relation's r (0) and the odometry's o
+    (1): its projection on the segment from r to o, as a fraction of the segment's length."""
+    e = between(nearest(poses, times, float(a)), nearest(poses, times, float(b)))
+    d = (o[0] - r[0], o[1] - r[1])
+    return ((e[0] - r[0]) * d[0] + (e[1] - r[1]) * d[1]) / (d[0] ** 2 + d[1] ** 2)
 
 
 def main():
@@ -169,13 +178,19 @@ def main():
         found, equal = odometry_corrections(rel, read_flaser_odometry(args.log))
         if poses:
             groups = {True: [], False: []}
+            shares = []
             for a, b, r in rel:
                 if (a, b) in found:
                     groups[(a, b) in equal].append(relation_error(poses, times, a, b, r))
+                    if (a, b) not in equal:
+                        shares.append(share_towards(poses, times, a, b, r, found[(a, b)]))
             for k, name in ((True, 'the odometry\'s translation'), (False, 'a corrected one')):
                 if groups[k]:
                     print('  trajectory on the short relations with %s: %d, mean error %.4f m'
                           % (name, len(groups[k]), statistics.mean(groups[k])))
+            if shares:
+                print('  on the corrected ones the trajectory lies on average %.0f %% of the way '
+                      'from the relation towards the odometry' % (100 * statistics.mean(shares)))
     lookup = {(a, b): r for a, b, r in rel}
     out = {}
     for a, b in lookup:

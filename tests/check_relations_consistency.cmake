@@ -4,7 +4,8 @@
 # long relation on it. Then --log on four short relations made from a log's odometry, one with
 # its translation and three moved by lattice vectors of 5 cm ((5, 0), (0, -5), (5, 5) cm), their
 # yaws by 1, 2, 0 and 1 steps of 0.25 deg, and the trajectory that is the odometry: the script
-# must find the lattices, and the trajectory's errors are the corrections.
+# must find the lattices, the trajectory's errors are the corrections, and it lies all the way
+# from the relations towards the odometry.
 # Arguments: -DPYTHON=<interpreter> -DSCRIPT=<script> -DWORK_DIR=<dir>.
 file(MAKE_DIRECTORY "${WORK_DIR}")
 file(WRITE "${WORK_DIR}/triangle.relations"
@@ -54,7 +55,8 @@ foreach(expected
         "an error-free trajectory scores about 0.0191 m on these 4 relations"
         "yaw corrections: 4 of 4 on offset 0.0000 + k * 0.00436 rad (0.250 deg)"
         "trajectory on the short relations with the odometry's translation: 1, mean error 0.0000 m"
-        "trajectory on the short relations with a corrected one: 3, mean error 0.0569 m")
+        "trajectory on the short relations with a corrected one: 3, mean error 0.0569 m"
+        "on the corrected ones the trajectory lies on average 100 % of the way from the relation")
   string(FIND "${out}" "${expected}" at)
   if(at EQUAL -1)
     message(FATAL_ERROR "expected \"${expected}\"")
