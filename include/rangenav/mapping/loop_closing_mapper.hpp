@@ -199,7 +199,8 @@ class LoopClosingMapper {
   static constexpr int dof = lie::pose_dof<D>;                          ///< 3 or 6
 
   /// Front end and loop-closure parameters. The front end's odometry_noise is required (set to
-  /// the default model when absent): it is what the pose graph's edges are made of.
+  /// the default model, calibrated online, when absent): it is what the pose graph's edges are
+  /// made of.
   LoopClosingMapper(IncrementalMapperParams<Scalar> front_end, LoopClosureParams<Scalar> loops)
       : loops_((loops.validate(), loops)), front_end_(with_noise(front_end)) {
     verify_icp_ = front_end_.icp;
@@ -329,7 +330,11 @@ class LoopClosingMapper {
   };
 
   static IncrementalMapperParams<Scalar> with_noise(IncrementalMapperParams<Scalar> p) {
-    if (!p.odometry_noise) p.odometry_noise = OdometryNoise<Scalar>{};
+    if (!p.odometry_noise) {
+      // The default model is a start only: calibrated to the robot's odometry as it drives.
+      p.odometry_noise = OdometryNoise<Scalar>{};
+      p.calibrate_odometry_noise = true;
+    }
     return p;
   }
 
@@ -681,13 +686,15 @@ class LoopClosingMapper {
 };
 
 /// Loop-closing 2D laser SLAM in its one default configuration: the front end of
-/// laser_slam_params() with the default OdometryNoise model, and LoopClosureParams' defaults.
+/// laser_slam_params() with the default OdometryNoise model calibrated online, and
+/// LoopClosureParams' defaults.
 template <std::floating_point Scalar = double>
 class LaserSlam : public LoopClosingMapper<2, Scalar, LaserIcp<Scalar>> {
  public:
   /// The default configuration.
   LaserSlam() : LaserSlam(laser_slam_params<Scalar>(), LoopClosureParams<Scalar>{}) {}
-  /// A configuration of one's own (an absent odometry noise model gets the default one).
+  /// A configuration of one's own (an absent odometry noise model gets the default one, calibrated
+  /// online).
   LaserSlam(IncrementalMapperParams<Scalar> front_end, LoopClosureParams<Scalar> loops)
       : LoopClosingMapper<2, Scalar, LaserIcp<Scalar>>(front_end, loops) {}
 };
