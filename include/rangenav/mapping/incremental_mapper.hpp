@@ -456,8 +456,13 @@ class IncrementalMapper {
             complete<D, Scalar>(r.transform, info, update.initial_guess, *prediction_information);
         // The reported information is the registration's plus the increment's either way:
         // along what the scan leaves free, the pose is no better known than the odometry says.
-        // The filter's covariance (relative to the map) is the posterior's, (Ω + Σ̄⁻¹)⁻¹.
-        update.information = (info + *odometry_information).eval();
+        // The increment's is the model's as given, not as calibrated: the calibration fits the
+        // odometry's typical step (its median leaves out the registrations that slid), and
+        // the pose graph's chain and the loop search's windows must not become that stiff
+        // where a registration slid unnoticed. The filter's covariance (relative to the map)
+        // is the posterior's, (Ω + Σ̄⁻¹)⁻¹.
+        update.information =
+            (info + params.odometry_noise->template covariance<D>(increment).inverse()).eval();
         pose_covariance_ = fused.information.inverse().eval();
         if (!has_increment) {
           // No odometry: no prediction to fuse with or to disagree with. The information is
