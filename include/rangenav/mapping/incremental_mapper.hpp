@@ -617,7 +617,7 @@ class IncrementalMapper {
   }
 
   // Online calibration of the odometry noise model by covariance matching (Mehra 1972,
-  // "Approaches to adaptive filtering", IEEE TAC 17(5); Mohamed & Schwarz 1999, Eq. 26: the
+  // "Approaches to adaptive filtering", IEEE TAC 17(5); Mohamed & Schwarz 1999, INS/GPS: the
   // noise covariance scaled so that the innovations' spread matches it). A sample is one
   // component k of the step error e = log((T_{i-1} u)⁻¹ T_i) between the odometry increment u
   // and an accepted registration T_i following an accepted one, where the registration's
