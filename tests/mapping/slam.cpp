@@ -460,35 +460,51 @@ TEST_CASE("The laser front end keeps the odometry where a short-range scan match
 
 TEST_CASE("LaserSlam lets the odometry carry the pose along a corridor the scans leave free",
           "[mapping][slam]") {
-  // A 2 m wide, 83 m long corridor with bare walls, scanned forwards (180° at 1°) to 5.6 m: the
-  // scans fix the lateral position and the heading, nothing along the axis. The odometry
-  // over-reads by 1 % (0.47 m after 49 m). What the registration reports along the axis is the
-  // normals' noise; taken as information it held the robot back, 10-14 m behind after 49 m
-  // (tools/corridor_drift --bare prints the same runs). The pose must stay within the
-  // odometry's own error of the truth.
-  rangenav::sim::World world;
-  world.add_polygon(std::vector<Point2d>{{-3, -1}, {80, -1}, {80, 1}, {-3, 1}});
-  rangenav::sim::LaserScannerParams scanner_params;
-  scanner_params.geometry = rangenav::ScanGeometry<double>::from_fov(
-      rangenav::deg_to_rad(180.0), rangenav::deg_to_rad(1.0), 0.05, 5.6);
-  const rangenav::sim::LaserScanner2D scanner(scanner_params);
-  for (unsigned seed = 1; seed <= 4; ++seed) {
-    std::mt19937 rng(seed);
-    rangenav::LaserSlam<double> slam;
-    Pose2d truth, odometry;
-    double worst = 0, odometry_error = 0;
-    for (int i = 0; i < 50; ++i) {
-      if (i > 0) {
-        truth = rangenav::compose(truth, {1.0, 0, 0});
-        odometry = rangenav::compose(odometry, {1.01, 0, 0.001});
+  // A 2 m wide, 83 m long corridor with bare walls, scanned forwards (180° at 1°): the scans fix
+  // the lateral position and the heading, nothing along the axis, so the odometry must carry
+  // the pose there. Its ground truth is the odometry's own error along the axis: it over- or
+  // under-reads by 1 %. Two failures show here (tools/corridor_drift --bare prints the same
+  // runs):
+  //  - what the map registration reports along the axis is the normals' noise; taken as
+  //    information it held the robot back, 10-14 m behind after 49 m (1 m steps, 5.6 m range);
+  //  - where the map registration is rejected, the scan-to-scan alignment stands in, and it
+  //    slides backwards (a scan that sees farther ahead pairs with the ends of the previous
+  //    scan's walls): uncompleted by the odometry, the slides added up to 1.2 m where the
+  //    odometry was 0.24 m off (0.5 m steps, 30 m range). Being one-sided, they also cancelled
+  //    part of an odometry that over-reads, so both signs are tested.
+  // The pose may be off by the odometry's error plus a tenth of it and 2 cm (the lateral error
+  // and what the completion leaves of a slide).
+  struct Run {
+    double step, range;
+  };
+  for (const Run run : {Run{1.0, 5.6}, Run{0.5, 30.0}}) {
+    rangenav::sim::World world;
+    world.add_polygon(std::vector<Point2d>{{-3, -1}, {80, -1}, {80, 1}, {-3, 1}});
+    rangenav::sim::LaserScannerParams scanner_params;
+    scanner_params.geometry = rangenav::ScanGeometry<double>::from_fov(
+        rangenav::deg_to_rad(180.0), rangenav::deg_to_rad(1.0), 0.05, run.range);
+    const rangenav::sim::LaserScanner2D scanner(scanner_params);
+    for (const double odometry_scale : {1.01, 0.99}) {
+      for (unsigned seed = 1; seed <= 4; ++seed) {
+        std::mt19937 rng(seed);
+        rangenav::LaserSlam<double> slam;
+        Pose2d truth, odometry;
+        double worst = 0, odometry_error = 0;
+        for (int i = 0; i < 50; ++i) {
+          if (i > 0) {
+            truth = rangenav::compose(truth, {run.step, 0, 0});
+            odometry = rangenav::compose(odometry, {run.step * odometry_scale, 0, 0.001});
+          }
+          const auto update = slam.process(scanner.scan(world, truth, rng), odometry.to_isometry());
+          worst = std::max(worst, (update.pose.translation() - truth.position()).norm());
+          odometry_error = std::abs(odometry.x - truth.x);
+        }
+        INFO("step " << run.step << " m, range " << run.range << " m, odometry scale "
+                     << odometry_scale << ", seed " << seed << ": worst error " << worst
+                     << " m, odometry " << odometry_error << " m along the axis");
+        CHECK(worst < 1.1 * odometry_error + 0.02);
       }
-      const auto update = slam.process(scanner.scan(world, truth, rng), odometry.to_isometry());
-      worst = std::max(worst, (update.pose.translation() - truth.position()).norm());
-      odometry_error = std::abs(odometry.x - truth.x);
     }
-    INFO("seed " << seed << ": worst error " << worst << " m, odometry " << odometry_error
-                 << " m along the axis");
-    CHECK(worst < odometry_error);
   }
 }
 
