@@ -271,9 +271,10 @@ class IncrementalMapper {
     update.pose = guess;
     // The odometry prediction's information (no odometry: the noise model's floors, those of
     // a zero increment; they only keep the information finite, see below).
-    std::optional<lie::PoseMatrix<D, Scalar>> odometry_information;
+    std::optional<lie::PoseMatrix<D, Scalar>> odometry_covariance, odometry_information;
     if (const auto noise = odometry_noise()) {
-      odometry_information = noise->template covariance<D>(increment).inverse().eval();
+      odometry_covariance = noise->template covariance<D>(increment);
+      odometry_information = odometry_covariance->inverse().eval();
       update.information = odometry_information;
     }
     // The prediction's information: an extended Kalman filter's prediction step (Thrun,
@@ -450,8 +451,13 @@ class IncrementalMapper {
       update.pose = r.transform;
       if (odometry_information) {
         const lie::PoseMatrix<D, Scalar> info = information_of(r.transform);
+        // The increment's covariance by the model as given (the one in use when uncalibrated).
+        const lie::PoseMatrix<D, Scalar> given_covariance =
+            params.calibrate_odometry_noise
+                ? params.odometry_noise->template covariance<D>(increment)
+                : *odometry_covariance;
         if (has_increment && previous_accepted_ && params.calibrate_odometry_noise)
-          calibrate(increment, r.transform, info);
+          calibrate(increment, r.transform, info, *odometry_covariance, given_covariance);
         const auto fused =
             complete<D, Scalar>(r.transform, info, update.initial_guess, *prediction_information);
         // The reported information is the registration's plus the increment's either way:
@@ -461,8 +467,7 @@ class IncrementalMapper {
         // the pose graph's chain and the loop search's windows must not become that stiff
         // where a registration slid unnoticed. The filter's covariance (relative to the map)
         // is the posterior's, (Ω + Σ̄⁻¹)⁻¹.
-        update.information =
-            (info + params.odometry_noise->template covariance<D>(increment).inverse()).eval();
+        update.information = (info + given_covariance.inverse()).eval();
         pose_covariance_ = fused.information.inverse().eval();
         if (!has_increment) {
           // No odometry: no prediction to fuse with or to disagree with. The information is
@@ -667,8 +672,10 @@ class IncrementalMapper {
   // which says nothing of its error in motion. Translation and rotation get a factor each, and
   // every σ term of the model is scaled by its square root (the factor kept within 10⁻⁴..10⁴,
   // so that exact odometry cannot collapse the model to zero).
+  // `model` and `prior` are the increment's covariances by the model in use and as given.
   void calibrate(const transform_type& increment, const transform_type& registered,
-                 const lie::PoseMatrix<D, Scalar>& info) {
+                 const lie::PoseMatrix<D, Scalar>& info, const lie::PoseMatrix<D, Scalar>& model,
+                 const lie::PoseMatrix<D, Scalar>& prior) {
     const OdometryNoise<Scalar>& given = *params.odometry_noise;
     if (increment.translation().norm() <= given.translation_floor &&
         std::abs(rotation_angle(increment)) <= given.rotation_floor)
@@ -677,8 +684,6 @@ class IncrementalMapper {
     if (llt.info() != Eigen::Success) return;
     const lie::PoseMatrix<D, Scalar> registration_covariance =
         llt.solve(lie::PoseMatrix<D, Scalar>::Identity());
-    const lie::PoseMatrix<D, Scalar> model = odometry_noise()->template covariance<D>(increment);
-    const lie::PoseMatrix<D, Scalar> prior = given.template covariance<D>(increment);
     const lie::PoseTangent<D, Scalar> e =
         lie::se_log<D, Scalar>((pose_ * increment).inverse(Eigen::Isometry) * registered);
     std::array<bool, 2> changed{false, false};
