@@ -508,6 +508,57 @@ TEST_CASE("LaserSlam lets the odometry carry the pose along a corridor the scans
   }
 }
 
+TEST_CASE("The odometry decides between map registrations whose pairs differ by chance",
+          "[mapping][slam]") {
+  // The corridor above with nine 0.3 m boxes along its walls, 0.5 m steps, 5.6 m range. Just
+  // after the robot passes a box (seed 1), the map registration slides 0.35 m back along the
+  // axis, where it pairs all 160 scan points: from the true pose the two farthest lie beyond
+  // the mapped part. The registration run again from the odometry guess lands near the truth,
+  // agrees with the odometry and pairs 158. Two more pairs are no evidence (McNemar's test:
+  // p = 0.25), so the odometry decides. Counted as evidence (witness_significance 0.5 takes
+  // any surplus, the former rule), the registrations held the robot back for five scans and
+  // the run ended 2.9 m behind, twelve times the odometry's own error. With the test the
+  // worst runs end up to twice the odometry's error off (tools/corridor_drift --step 0.5
+  // prints them); the bound leaves a quarter of that as margin.
+  rangenav::sim::World world;
+  world.add_polygon(std::vector<Point2d>{{-3, -1}, {80, -1}, {80, 1}, {-3, 1}});
+  const double xs[] = {2.3, 7.9, 15.2, 21.7, 30.4, 38.8, 47.1, 55.6, 63.0};
+  for (int i = 0; i < 9; ++i)
+    world.add_box({{xs[i], i % 2 ? 0.85 : -0.85}, {0.3, 0.3}, 0.0, 0.0, 1.0});
+  rangenav::sim::LaserScannerParams scanner_params;
+  scanner_params.geometry = rangenav::ScanGeometry<double>::from_fov(
+      rangenav::deg_to_rad(180.0), rangenav::deg_to_rad(1.0), 0.05, 5.6);
+  const rangenav::sim::LaserScanner2D scanner(scanner_params);
+  const auto run = [&](double odometry_scale, unsigned seed, double significance) {
+    std::mt19937 rng(seed);
+    auto front_end = rangenav::laser_slam_params<double>();
+    front_end.witness_significance = significance;
+    rangenav::LaserSlam<double> slam(front_end, {});
+    Pose2d truth, odometry;
+    double worst = 0;
+    for (int i = 0; i < 50; ++i) {
+      if (i > 0) {
+        truth = rangenav::compose(truth, {0.5, 0, 0});
+        odometry = rangenav::compose(odometry, {0.5 * odometry_scale, 0, 0.001});
+      }
+      const auto update = slam.process(scanner.scan(world, truth, rng), odometry.to_isometry());
+      worst = std::max(worst, (update.pose.translation() - truth.position()).norm());
+    }
+    return std::pair{worst, std::abs(odometry.x - truth.x)};
+  };
+  const double by_default = rangenav::IncrementalMapperParams<double>{}.witness_significance;
+  for (const double odometry_scale : {1.01, 0.99}) {
+    for (unsigned seed = 1; seed <= 4; ++seed) {
+      const auto [worst, odometry_error] = run(odometry_scale, seed, by_default);
+      INFO("odometry scale " << odometry_scale << ", seed " << seed << ": worst error " << worst
+                             << " m, odometry " << odometry_error << " m along the axis");
+      CHECK(worst < 2.5 * odometry_error);
+    }
+  }
+  const auto [counted, odometry_error] = run(1.01, 1, 0.5);
+  CHECK(counted > 5 * odometry_error);
+}
+
 TEST_CASE("The laser front end follows a robot reversing along its route", "[mapping][slam]") {
   // intel-corrected's 910 scans (about half a metre and up to tens of degrees apart) in reverse
   // order, with their corrected poses (the truth) as odometry: the robot drives its route

@@ -515,6 +515,49 @@ TEST_CASE("LaserSlamMapper tracks through odometry that freezes and then jumps",
                     "must be finite and > 0");
 }
 
+TEST_CASE("McNemar's exact test counts the pairs only one of two registrations has", "[mapping]") {
+  using rangenav::detail::binomial_half_tail;
+  // P(X >= k), X ~ Binomial(n, 1/2), in closed form.
+  CHECK(binomial_half_tail(0, 0) == 1.0);
+  CHECK(binomial_half_tail(0, 7) == 1.0);
+  CHECK(binomial_half_tail(1, 1) == Approx(0.5));
+  CHECK(binomial_half_tail(2, 2) == Approx(0.25));
+  CHECK(binomial_half_tail(3, 5) == Approx(0.5));
+  CHECK(binomial_half_tail(5, 5) == Approx(1.0 / 32));
+  CHECK(binomial_half_tail(6, 5) == 0.0);
+  CHECK(binomial_half_tail(4, 10) == Approx(848.0 / 1024));
+  CHECK(binomial_half_tail(10, 10) == Approx(1.0 / 1024));
+  // n = 2000 (2^-2000 underflows a double): P(X >= 1000) = 1/2 + C(2000, 1000) 2^-2001, and
+  // C(2n, n) 4^-n = 0.0178390 for n = 1000.
+  CHECK(binomial_half_tail(1000, 2000) == Approx(0.5 + 0.0178390 / 2).epsilon(1e-6));
+
+  // Registration a pairs scan points 0..a_last, b pairs 0..b_last (and b's are listed in
+  // another order): only the points one of them pairs count.
+  using Pair = rangenav::Correspondence<2, double>;
+  const auto pairs = [](std::uint32_t count, bool reversed) {
+    std::vector<Pair> out;
+    for (std::uint32_t i = 0; i < count; ++i)
+      out.push_back(
+          {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), 0.0, reversed ? count - 1 - i : i, i});
+    return out;
+  };
+  const auto more = [&](std::uint32_t a, std::uint32_t b) {
+    return rangenav::detail::pairs_more_beyond_chance<2, double>(pairs(a, false), pairs(b, true),
+                                                                 200, 0.05);
+  };
+  CHECK_FALSE(more(160, 158));  // 2 of 2 discordant points: p = 0.25
+  CHECK_FALSE(more(164, 160));  // p = 1/16
+  CHECK(more(165, 160));        // p = 1/32
+  CHECK_FALSE(more(160, 165));  // fewer is never more
+  CHECK_FALSE(more(160, 160));
+
+  auto bad = laser_slam_params<double>();
+  bad.witness_significance = 0.0;
+  CHECK_THROWS_WITH(LaserSlamMapper<double>(bad),
+                    "rangenav: IncrementalMapperParams: argument 'witness_significance' = 0 "
+                    "must be in (0, 1)");
+}
+
 TEST_CASE("The laser setup's map registration uses a weakly observed direction", "[mapping]") {
   // A 2 m wide corridor whose walls are plain but for one shallow recess: along the corridor
   // only the recess's two short sides constrain the registration (a weak direction, well under
