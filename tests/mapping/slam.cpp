@@ -458,6 +458,43 @@ TEST_CASE("The laser front end keeps the odometry where a short-range scan match
   CHECK(worst_deg < 3.0);
 }
 
+namespace {
+// LaserSlam with the front end `front_end` driving 50 scans down a 2 m wide, 83 m long
+// simulated corridor (tools/corridor_drift's, with its nine boxes or bare walls), scanning
+// forwards (180° at 1°) to `range`, in steps of `step` along the axis; the odometry reads
+// `odometry_scale` times each step and turns 0.001 rad. Returns the worst position error
+// against the truth and the odometry's error along the axis at the end.
+std::pair<double, double> drive_corridor(bool boxes, double step, double range,
+                                         double odometry_scale, unsigned seed,
+                                         const rangenav::IncrementalMapperParams<double>&
+                                             front_end = rangenav::laser_slam_params<double>()) {
+  rangenav::sim::World world;
+  world.add_polygon(std::vector<Point2d>{{-3, -1}, {80, -1}, {80, 1}, {-3, 1}});
+  if (boxes) {
+    const double xs[] = {2.3, 7.9, 15.2, 21.7, 30.4, 38.8, 47.1, 55.6, 63.0};
+    for (int i = 0; i < 9; ++i)
+      world.add_box({{xs[i], i % 2 ? 0.85 : -0.85}, {0.3, 0.3}, 0.0, 0.0, 1.0});
+  }
+  rangenav::sim::LaserScannerParams scanner_params;
+  scanner_params.geometry = rangenav::ScanGeometry<double>::from_fov(
+      rangenav::deg_to_rad(180.0), rangenav::deg_to_rad(1.0), 0.05, range);
+  const rangenav::sim::LaserScanner2D scanner(scanner_params);
+  std::mt19937 rng(seed);
+  rangenav::LaserSlam<double> slam(front_end, {});
+  Pose2d truth, odometry;
+  double worst = 0;
+  for (int i = 0; i < 50; ++i) {
+    if (i > 0) {
+      truth = rangenav::compose(truth, {step, 0, 0});
+      odometry = rangenav::compose(odometry, {step * odometry_scale, 0, 0.001});
+    }
+    const auto update = slam.process(scanner.scan(world, truth, rng), odometry.to_isometry());
+    worst = std::max(worst, (update.pose.translation() - truth.position()).norm());
+  }
+  return {worst, std::abs(odometry.x - truth.x)};
+}
+}  // namespace
+
 TEST_CASE("LaserSlam lets the odometry carry the pose along a corridor the scans leave free",
           "[mapping][slam]") {
   // A 2 m wide, 83 m long corridor with bare walls, scanned forwards (180° at 1°): the scans fix
@@ -478,27 +515,10 @@ TEST_CASE("LaserSlam lets the odometry carry the pose along a corridor the scans
     double step, range;
   };
   for (const Run run : {Run{1.0, 5.6}, Run{0.5, 30.0}}) {
-    rangenav::sim::World world;
-    world.add_polygon(std::vector<Point2d>{{-3, -1}, {80, -1}, {80, 1}, {-3, 1}});
-    rangenav::sim::LaserScannerParams scanner_params;
-    scanner_params.geometry = rangenav::ScanGeometry<double>::from_fov(
-        rangenav::deg_to_rad(180.0), rangenav::deg_to_rad(1.0), 0.05, run.range);
-    const rangenav::sim::LaserScanner2D scanner(scanner_params);
     for (const double odometry_scale : {1.01, 0.99}) {
       for (unsigned seed = 1; seed <= 4; ++seed) {
-        std::mt19937 rng(seed);
-        rangenav::LaserSlam<double> slam;
-        Pose2d truth, odometry;
-        double worst = 0, odometry_error = 0;
-        for (int i = 0; i < 50; ++i) {
-          if (i > 0) {
-            truth = rangenav::compose(truth, {run.step, 0, 0});
-            odometry = rangenav::compose(odometry, {run.step * odometry_scale, 0, 0.001});
-          }
-          const auto update = slam.process(scanner.scan(world, truth, rng), odometry.to_isometry());
-          worst = std::max(worst, (update.pose.translation() - truth.position()).norm());
-          odometry_error = std::abs(odometry.x - truth.x);
-        }
+        const auto [worst, odometry_error] =
+            drive_corridor(false, run.step, run.range, odometry_scale, seed);
         INFO("step " << run.step << " m, range " << run.range << " m, odometry scale "
                      << odometry_scale << ", seed " << seed << ": worst error " << worst
                      << " m, odometry " << odometry_error << " m along the axis");
@@ -520,31 +540,10 @@ TEST_CASE("The odometry decides between map registrations whose pairs differ by 
   // the run ended 2.9 m behind, twelve times the odometry's own error. With the test the
   // worst runs end up to twice the odometry's error off (tools/corridor_drift --step 0.5
   // prints them); the bound leaves a quarter of that as margin.
-  rangenav::sim::World world;
-  world.add_polygon(std::vector<Point2d>{{-3, -1}, {80, -1}, {80, 1}, {-3, 1}});
-  const double xs[] = {2.3, 7.9, 15.2, 21.7, 30.4, 38.8, 47.1, 55.6, 63.0};
-  for (int i = 0; i < 9; ++i)
-    world.add_box({{xs[i], i % 2 ? 0.85 : -0.85}, {0.3, 0.3}, 0.0, 0.0, 1.0});
-  rangenav::sim::LaserScannerParams scanner_params;
-  scanner_params.geometry = rangenav::ScanGeometry<double>::from_fov(
-      rangenav::deg_to_rad(180.0), rangenav::deg_to_rad(1.0), 0.05, 5.6);
-  const rangenav::sim::LaserScanner2D scanner(scanner_params);
-  const auto run = [&](double odometry_scale, unsigned seed, double significance) {
-    std::mt19937 rng(seed);
+  const auto run = [](double odometry_scale, unsigned seed, double significance) {
     auto front_end = rangenav::laser_slam_params<double>();
     front_end.witness_significance = significance;
-    rangenav::LaserSlam<double> slam(front_end, {});
-    Pose2d truth, odometry;
-    double worst = 0;
-    for (int i = 0; i < 50; ++i) {
-      if (i > 0) {
-        truth = rangenav::compose(truth, {0.5, 0, 0});
-        odometry = rangenav::compose(odometry, {0.5 * odometry_scale, 0, 0.001});
-      }
-      const auto update = slam.process(scanner.scan(world, truth, rng), odometry.to_isometry());
-      worst = std::max(worst, (update.pose.translation() - truth.position()).norm());
-    }
-    return std::pair{worst, std::abs(odometry.x - truth.x)};
+    return drive_corridor(true, 0.5, 5.6, odometry_scale, seed, front_end);
   };
   const double by_default = rangenav::IncrementalMapperParams<double>{}.witness_significance;
   for (const double odometry_scale : {1.01, 0.99}) {
