@@ -4,6 +4,13 @@
 // replaced by their centroid. Deterministic output ordered by voxel key; the points of a voxel
 // are summed in input order, serially or on several threads alike, so the thread count does not
 // change a bit of the output.
+//
+// A voxel's key packs its cell, counted from the cell of the cloud's first finite point, into 21
+// bits per axis, so a cloud may lie anywhere (a lidar map in UTM coordinates, millions of metres
+// from 0). A cloud with a finite point 2^20 voxels or more from its first one (wider than 262 km
+// at 0.25 m, an outlier, a leaf far too small) is filtered again without keys, over cells in an
+// ordered map: the same voxels and output, slower. Nothing finite is dropped unless it lies 2^62
+// voxels or more from 0.
 
 #include <algorithm>
 #include <array>
@@ -11,6 +18,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <map>
+#include <optional>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -24,17 +33,98 @@ namespace rangenav {
 
 namespace detail {
 
-/// The serial voxel filter (see voxel_downsample).
+/// Half the range of a voxel key's cell field (21 bits per axis, see the file comment).
+inline constexpr std::int64_t voxel_key_half = std::int64_t(1) << 20;
+
+/// floor(t) for |t| < 2^62, without a libm call: truncate, then step down for negative fractions.
+template <std::floating_point Scalar>
+[[nodiscard]] std::int64_t floor_to_int(Scalar t) {
+  auto c = static_cast<std::int64_t>(t);
+  return c - static_cast<std::int64_t>(t < static_cast<Scalar>(c));
+}
+
+/// Whether a point of a cloud has finite coordinates.
+template <class P>
+[[nodiscard]] bool voxel_point_finite(const P& p, int dimension) {
+  for (int d = 0; d < dimension; ++d)
+    if (!std::isfinite(p[static_cast<Eigen::Index>(d)])) return false;
+  return true;
+}
+
+/// The origin cell of the keyed filter: that of the cloud's first finite point (zeros if none,
+/// or when its cell does not fit an int64: that point then sends the cloud to the exact filter).
 template <PointCloud C>
-[[nodiscard]] std::vector<cloud_point_t<C>> voxel_downsample_serial(const C& cloud,
-                                                                    traits::scalar_t<C> leaf_size) {
+[[nodiscard]] std::array<std::int64_t, traits::dimension_v<C>> first_voxel_origin(
+    const C& cloud, traits::scalar_t<C> leaf_size) {
+  using Scalar = traits::scalar_t<C>;
+  constexpr int D = traits::dimension_v<C>;
+  const Scalar inv = Scalar(1) / leaf_size;
+  constexpr Scalar limit = Scalar(std::int64_t(1) << 62);
+  std::array<std::int64_t, D> origin{};
+  for (std::size_t i = 0; i < traits::size(cloud); ++i) {
+    const auto& p = traits::point(cloud, i);
+    if (!voxel_point_finite(p, D)) continue;
+    for (int d = 0; d < D; ++d) {
+      const Scalar t = static_cast<Scalar>(p[d]) * inv;
+      if (!(t > -limit && t < limit)) return std::array<std::int64_t, D>{};
+      origin[static_cast<std::size_t>(d)] = floor_to_int(t);
+    }
+    break;
+  }
+  return origin;
+}
+
+/// The voxel filter for a cloud the keys cannot hold (a finite point 2^20 or more voxels from
+/// the first one): the same voxels, sums and order (by cell) as the keyed filter, over cells of
+/// any size, in an ordered map; slower, and run only for such a cloud.
+template <PointCloud C>
+[[nodiscard]] std::vector<cloud_point_t<C>> voxel_downsample_exact(const C& cloud,
+                                                                   traits::scalar_t<C> leaf_size) {
+  using Scalar = traits::scalar_t<C>;
+  constexpr int D = traits::dimension_v<C>;
+  using Point = cloud_point_t<C>;
+  const Scalar inv = Scalar(1) / leaf_size;
+  constexpr Scalar limit = Scalar(std::int64_t(1) << 62);
+  std::map<std::array<std::int64_t, D>, std::pair<std::array<Scalar, D>, std::size_t>> voxels;
+  for (std::size_t i = 0; i < traits::size(cloud); ++i) {
+    const auto& p = traits::point(cloud, i);
+    std::array<std::int64_t, D> cell;
+    bool representable = true;
+    for (int d = 0; d < D; ++d) {
+      const Scalar t = static_cast<Scalar>(p[d]) * inv;
+      representable = representable && t > -limit && t < limit;
+      cell[static_cast<std::size_t>(d)] = floor_to_int(representable ? t : Scalar(0));
+    }
+    if (!representable) continue;  // not finite, or 2^62 voxels or more from 0
+    auto& [sum, count] = voxels[cell];
+    for (int d = 0; d < D; ++d)
+      sum[static_cast<std::size_t>(d)] += static_cast<Scalar>(p[d]);
+    ++count;
+  }
+  std::vector<Point> out;
+  out.reserve(voxels.size());
+  for (const auto& [cell, voxel] : voxels) {
+    Point sum;
+    for (int d = 0; d < D; ++d)
+      sum[d] = voxel.first[static_cast<std::size_t>(d)];
+    out.push_back(sum / static_cast<Scalar>(voxel.second));
+  }
+  return out;
+}
+
+/// One pass of the serial voxel filter with the voxel keys counted from the cell `origin`;
+/// nullopt when a finite point lies outside their range (see the file comment).
+template <PointCloud C>
+[[nodiscard]] std::optional<std::vector<cloud_point_t<C>>> voxel_pass_serial(
+    const C& cloud, traits::scalar_t<C> leaf_size,
+    const std::array<std::int64_t, traits::dimension_v<C>>& origin) {
   using Scalar = traits::scalar_t<C>;
   constexpr int D = traits::dimension_v<C>;
   using Point = cloud_point_t<C>;
   constexpr std::size_t Dim = D;
   using Coords = std::array<Scalar, Dim>;  // (std::array: registers, where Eigen's spill)
   const std::size_t n = traits::size(cloud);
-  constexpr std::int64_t half = std::int64_t(1) << 20;
+  constexpr std::int64_t half = voxel_key_half;
   const Scalar inv = Scalar(1) / leaf_size;
   // A point p lies in the cell c = floor(p * inv) (per axis). p * inv rounds monotonically in
   // p, so the cell is an interval of coordinates: [first(c), first(c + 1)) with first(c) the
@@ -101,9 +191,9 @@ template <PointCloud C>
     for (std::size_t d = 0; d < Dim; ++d)
       p[d] = q[static_cast<Eigen::Index>(d)];
   };
-  // floor(p * inv) must lie in (-half, half - 1), i.e. p * inv in [1 - half, half - 1); NaN
-  // and infinite coordinates fail the test as well.
-  const Scalar lowest = Scalar(1 - half), highest = Scalar(half - 1);
+  // floor(p * inv) - origin must lie in [1 - half, half - 2]; NaN and infinite coordinates fail
+  // the test as well.
+  constexpr Scalar limit = Scalar(std::int64_t(1) << 62);
   std::uint32_t current = none, before = none;
   Coords p;
   for (std::size_t i = 0; i < n;) {
@@ -115,14 +205,15 @@ template <PointCloud C>
       Coords cell;
       for (std::size_t d = 0; d < Dim; ++d) {
         const Scalar t = p[d] * inv;
-        inside = inside && t >= lowest && t < highest;
-        // floor(t) without a libm call: truncate, then step down for negative fractions.
-        auto c = static_cast<std::int64_t>(inside ? t : Scalar(0));
-        c -= static_cast<std::int64_t>(t < static_cast<Scalar>(c));
+        const bool representable = t > -limit && t < limit;
+        const std::int64_t c = floor_to_int(representable ? t : Scalar(0));
+        const std::int64_t r = c - origin[d];
+        inside = inside && representable && r >= 1 - half && r <= half - 2;
         cell[d] = static_cast<Scalar>(c);
-        key = (key << 21) | static_cast<std::uint64_t>(c + half);
+        key = (key << 21) | static_cast<std::uint64_t>(inside ? r + half : 0);
       }
       if (!inside) {
+        if (voxel_point_finite(traits::point(cloud, i), D)) return std::nullopt;
         ++i;
         continue;
       }
@@ -178,6 +269,16 @@ template <PointCloud C>
   return out;
 }
 
+/// The serial voxel filter (see voxel_downsample): keyed from the first finite point's cell,
+/// else exact.
+template <PointCloud C>
+[[nodiscard]] std::vector<cloud_point_t<C>> voxel_downsample_serial(const C& cloud,
+                                                                    traits::scalar_t<C> leaf_size) {
+  if (auto out = voxel_pass_serial(cloud, leaf_size, first_voxel_origin(cloud, leaf_size)))
+    return std::move(*out);
+  return voxel_downsample_exact(cloud, leaf_size);
+}
+
 /// The voxel filter on several threads, with the serial filter's output: the key of every point
 /// (in parallel), the points bucketed by key hash in input order, each bucket's voxels summed in
 /// input order (in parallel), the voxels sorted by key.
@@ -189,28 +290,39 @@ template <PointCloud C>
   constexpr int D = traits::dimension_v<C>;
   using Point = cloud_point_t<C>;
   const std::size_t n = traits::size(cloud);
-  constexpr std::int64_t half = std::int64_t(1) << 20;
+  constexpr std::int64_t half = voxel_key_half;
   constexpr std::uint64_t outside = std::numeric_limits<std::uint64_t>::max();
   const Scalar inv = Scalar(1) / leaf_size;
-  const Scalar lowest = Scalar(1 - half), highest = Scalar(half - 1);
-  // The cell key of every point, as the serial filter computes it (outside: skipped).
+  // A finite point outside the key range of the first finite point's cell: the exact filter
+  // takes over, as in the serial filter (see the file comment).
+  constexpr std::uint64_t beyond = outside - 1;
+  constexpr Scalar limit = Scalar(std::int64_t(1) << 62);
+  // The cell key of every point from `origin`, as the serial filter computes it (outside:
+  // skipped).
   std::vector<std::uint64_t> keys(n);
   constexpr std::size_t block = 4096;
-  for_each_block(n, block, num_threads, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const auto& p = traits::point(cloud, i);
-      std::uint64_t key = 0;
-      bool inside = true;
-      for (int d = 0; d < D; ++d) {
-        const Scalar t = static_cast<Scalar>(p[d]) * inv;
-        inside = inside && t >= lowest && t < highest;
-        auto c = static_cast<std::int64_t>(inside ? t : Scalar(0));
-        c -= static_cast<std::int64_t>(t < static_cast<Scalar>(c));
-        key = (key << 21) | static_cast<std::uint64_t>(c + half);
-      }
-      keys[i] = inside ? key : outside;
-    }
-  });
+  const auto key_all = [&](const std::array<std::int64_t, D>& origin) {
+    for_each_block(
+        n, block, num_threads, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+          for (std::size_t i = begin; i < end; ++i) {
+            const auto& p = traits::point(cloud, i);
+            std::uint64_t key = 0;
+            bool inside = true;
+            for (int d = 0; d < D; ++d) {
+              const Scalar t = static_cast<Scalar>(p[d]) * inv;
+              const bool representable = t > -limit && t < limit;
+              const std::int64_t r =
+                  floor_to_int(representable ? t : Scalar(0)) - origin[static_cast<std::size_t>(d)];
+              inside = inside && representable && r >= 1 - half && r <= half - 2;
+              key = (key << 21) | static_cast<std::uint64_t>(inside ? r + half : 0);
+            }
+            keys[i] = inside ? key : voxel_point_finite(p, D) ? beyond : outside;
+          }
+        });
+    return std::find(keys.begin(), keys.end(), beyond) == keys.end();
+  };
+  if (!key_all(first_voxel_origin(cloud, leaf_size)))
+    return voxel_downsample_exact(cloud, leaf_size);
   // Buckets by key hash, points in input order inside each (a stable counting sort).
   const std::size_t buckets = 16 * static_cast<std::size_t>(num_threads);
   const auto bucket_of = [buckets](std::uint64_t key) {
@@ -267,10 +379,10 @@ template <PointCloud C>
 
 }  // namespace detail
 
-/// Replaces the points of every voxel by their centroid. Non-finite points are skipped; the
-/// voxel coordinates must fit in 21 bits per axis (|coordinate| < 2^20 * leaf_size), points
-/// beyond that are skipped too. With num_threads > 1 the work runs on that many threads (same
-/// output). Throws invalid_argument unless leaf_size is finite and > 0 and num_threads >= 1.
+/// Replaces the points of every voxel by their centroid, for a cloud anywhere in space (see the
+/// file comment). Non-finite points are skipped, and so are points 2^62 voxels or more from 0.
+/// With num_threads > 1 the work runs on that many threads (same output). Throws
+/// invalid_argument unless leaf_size is finite and > 0 and num_threads >= 1.
 template <PointCloud C>
 [[nodiscard]] std::vector<cloud_point_t<C>> voxel_downsample(const C& cloud,
                                                              traits::scalar_t<C> leaf_size,
