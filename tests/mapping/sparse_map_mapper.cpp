@@ -41,7 +41,8 @@ TEST_CASE("voxel_downsample replaces each voxel by its centroid", "[mapping]") {
 
 namespace {
 // The voxel filter's definition, by brute force: the centroid of the finite points of every cell
-// floor(p / leaf) (summed in input order), ordered by cell; points beyond 2^20 cells skipped.
+// floor(p / leaf) (summed in input order), ordered by cell; points 2^62 cells or more from 0
+// skipped.
 template <int D, class Scalar>
 std::vector<Point<D, Scalar>> reference_voxels(const std::vector<Point<D, Scalar>>& pts,
                                                Scalar leaf) {
@@ -50,9 +51,9 @@ std::vector<Point<D, Scalar>> reference_voxels(const std::vector<Point<D, Scalar
     std::array<std::int64_t, D> key{};
     bool ok = p.allFinite();
     for (int d = 0; d < D && ok; ++d) {
-      const Scalar c = std::floor(p[d] * (Scalar(1) / leaf));
-      ok = c > -Scalar(1 << 20) && c < Scalar((1 << 20) - 1);
-      key[static_cast<std::size_t>(d)] = ok ? static_cast<std::int64_t>(c) : 0;
+      const Scalar t = p[d] * (Scalar(1) / leaf);
+      ok = std::abs(t) < Scalar(std::int64_t(1) << 62);
+      key[static_cast<std::size_t>(d)] = ok ? static_cast<std::int64_t>(std::floor(t)) : 0;
     }
     if (!ok) continue;
     auto& [sum, count] = cells.try_emplace(key, Point<D, Scalar>::Zero(), 0).first->second;
@@ -68,7 +69,8 @@ std::vector<Point<D, Scalar>> reference_voxels(const std::vector<Point<D, Scalar
 
 TEST_CASE("voxel_downsample equals the brute-force centroids of its cells", "[mapping]") {
   // Runs of points in one voxel (an organised frame's rows), revisited voxels, points exactly
-  // on cell faces (negative too), NaN / infinite points and coordinates beyond the 2^20 cells.
+  // on cell faces (negative too), NaN / infinite points and coordinates beyond the voxel keys'
+  // 2^20 cells (the filter over exact cells), and beyond 2^62 cells (skipped).
   std::mt19937 rng(17);
   std::normal_distribution<double> noise(0.0, 0.004);
   std::vector<Eigen::Vector3d> frame;
@@ -83,8 +85,9 @@ TEST_CASE("voxel_downsample equals the brute-force centroids of its cells", "[ma
   const double inf = std::numeric_limits<double>::infinity();
   frame.insert(frame.begin() + 100, Eigen::Vector3d(nan, 0, 0));
   frame.insert(frame.begin() + 200, Eigen::Vector3d(0, inf, 0));
-  frame.emplace_back(1e6, 0, 0);  // cell 4e6: beyond 2^20, skipped
+  frame.emplace_back(1e6, 0, 0);  // cell 4e6 at 0.25 m: beyond the keys' 2^20, kept
   frame.emplace_back(-1e6, 0, 0);
+  frame.emplace_back(0, 1e300, 0);  // beyond 2^62 cells: skipped
   // Runs that step across cell faces by one ulp: c * leaf and its neighbouring doubles, where
   // the rounding of p / leaf decides the cell (the filter tests cell bounds, not floor(p / leaf)).
   std::vector<Eigen::Vector3d> faces;
