@@ -36,6 +36,10 @@ namespace detail {
 /// Half the range of a voxel key's cell field (21 bits per axis, see the file comment).
 inline constexpr std::int64_t voxel_key_half = std::int64_t(1) << 20;
 
+/// Cells 2^62 or more from 0 fit no int64 difference: points there are skipped.
+template <std::floating_point Scalar>
+inline constexpr Scalar voxel_cell_limit = Scalar(std::int64_t(1) << 62);
+
 /// floor(t) for |t| < 2^62, without a libm call: truncate, then step down for negative fractions.
 template <std::floating_point Scalar>
 [[nodiscard]] std::int64_t floor_to_int(Scalar t) {
@@ -43,12 +47,54 @@ template <std::floating_point Scalar>
   return c - static_cast<std::int64_t>(t < static_cast<Scalar>(c));
 }
 
-/// Whether a point of a cloud has finite coordinates.
-template <class P>
-[[nodiscard]] bool voxel_point_finite(const P& p, int dimension) {
-  for (int d = 0; d < dimension; ++d)
-    if (!std::isfinite(p[static_cast<Eigen::Index>(d)])) return false;
-  return true;
+/// A point's coordinates as an array (std::array: registers, where Eigen's vectors spill).
+template <PointCloud C>
+using voxel_coords_t =
+    std::array<traits::scalar_t<C>, static_cast<std::size_t>(traits::dimension_v<C>)>;
+
+/// The coordinates of point k of a cloud.
+template <PointCloud C>
+[[nodiscard]] voxel_coords_t<C> voxel_coords(const C& cloud, std::size_t k) {
+  const auto& q = traits::point(cloud, k);
+  voxel_coords_t<C> p;
+  for (std::size_t d = 0; d < p.size(); ++d)
+    p[d] = static_cast<traits::scalar_t<C>>(q[static_cast<Eigen::Index>(d)]);
+  return p;
+}
+
+/// Whether every coordinate is finite.
+template <std::floating_point Scalar, std::size_t D>
+[[nodiscard]] bool voxel_point_finite(const std::array<Scalar, D>& p) {
+  return std::all_of(p.begin(), p.end(), [](Scalar x) { return std::isfinite(x); });
+}
+
+/// The cell floor(p * inv) of a point, per axis; nullopt when a coordinate is not finite or its
+/// cell lies 2^62 or more from 0.
+template <std::floating_point Scalar, std::size_t D>
+[[nodiscard]] std::optional<std::array<std::int64_t, D>> voxel_cell(const std::array<Scalar, D>& p,
+                                                                    Scalar inv) {
+  std::array<std::int64_t, D> cell;
+  for (std::size_t d = 0; d < D; ++d) {
+    const Scalar t = p[d] * inv;
+    if (!(t > -voxel_cell_limit<Scalar> && t < voxel_cell_limit<Scalar>)) return std::nullopt;
+    cell[d] = floor_to_int(t);
+  }
+  return cell;
+}
+
+/// The key of a cell counted from the cell `origin`: cell - origin + half in 21 bits per axis,
+/// for cell - origin in [1 - half, half - 2]; nullopt outside that range (see the file comment).
+template <std::size_t D>
+[[nodiscard]] std::optional<std::uint64_t> voxel_key(const std::array<std::int64_t, D>& cell,
+                                                     const std::array<std::int64_t, D>& origin) {
+  constexpr std::int64_t half = voxel_key_half;
+  std::uint64_t key = 0;
+  for (std::size_t d = 0; d < D; ++d) {
+    const std::int64_t r = cell[d] - origin[d];  // both below 2^62 in magnitude
+    if (r < 1 - half || r > half - 2) return std::nullopt;
+    key = (key << 21) | static_cast<std::uint64_t>(r + half);
+  }
+  return key;
 }
 
 /// The origin cell of the keyed filter: that of the cloud's first finite point (zeros if none,
@@ -56,22 +102,14 @@ template <class P>
 template <PointCloud C>
 [[nodiscard]] std::array<std::int64_t, traits::dimension_v<C>> first_voxel_origin(
     const C& cloud, traits::scalar_t<C> leaf_size) {
-  using Scalar = traits::scalar_t<C>;
-  constexpr int D = traits::dimension_v<C>;
-  const Scalar inv = Scalar(1) / leaf_size;
-  constexpr Scalar limit = Scalar(std::int64_t(1) << 62);
-  std::array<std::int64_t, D> origin{};
+  const traits::scalar_t<C> inv = traits::scalar_t<C>(1) / leaf_size;
   for (std::size_t i = 0; i < traits::size(cloud); ++i) {
-    const auto& p = traits::point(cloud, i);
-    if (!voxel_point_finite(p, D)) continue;
-    for (int d = 0; d < D; ++d) {
-      const Scalar t = static_cast<Scalar>(p[d]) * inv;
-      if (!(t > -limit && t < limit)) return std::array<std::int64_t, D>{};
-      origin[static_cast<std::size_t>(d)] = floor_to_int(t);
-    }
-    break;
+    const auto p = voxel_coords(cloud, i);
+    if (!voxel_point_finite(p)) continue;
+    if (auto cell = voxel_cell(p, inv)) return *cell;
+    break;  // its cell fits no int64
   }
-  return origin;
+  return {};
 }
 
 /// The voxel filter for a cloud the keys cannot hold (a finite point 2^20 or more voxels from
@@ -84,21 +122,14 @@ template <PointCloud C>
   constexpr int D = traits::dimension_v<C>;
   using Point = cloud_point_t<C>;
   const Scalar inv = Scalar(1) / leaf_size;
-  constexpr Scalar limit = Scalar(std::int64_t(1) << 62);
   std::map<std::array<std::int64_t, D>, std::pair<std::array<Scalar, D>, std::size_t>> voxels;
   for (std::size_t i = 0; i < traits::size(cloud); ++i) {
-    const auto& p = traits::point(cloud, i);
-    std::array<std::int64_t, D> cell;
-    bool representable = true;
-    for (int d = 0; d < D; ++d) {
-      const Scalar t = static_cast<Scalar>(p[d]) * inv;
-      representable = representable && t > -limit && t < limit;
-      cell[static_cast<std::size_t>(d)] = floor_to_int(representable ? t : Scalar(0));
-    }
-    if (!representable) continue;  // not finite, or 2^62 voxels or more from 0
-    auto& [sum, count] = voxels[cell];
-    for (int d = 0; d < D; ++d)
-      sum[static_cast<std::size_t>(d)] += static_cast<Scalar>(p[d]);
+    const auto p = voxel_coords(cloud, i);
+    const auto cell = voxel_cell(p, inv);
+    if (!cell) continue;  // not finite, or 2^62 voxels or more from 0
+    auto& [sum, count] = voxels[*cell];
+    for (std::size_t d = 0; d < p.size(); ++d)
+      sum[d] += p[d];
     ++count;
   }
   std::vector<Point> out;
@@ -112,20 +143,18 @@ template <PointCloud C>
   return out;
 }
 
-/// One pass of the serial voxel filter with the voxel keys counted from the cell `origin`;
+/// The serial voxel filter with the voxel keys counted from the first finite point's cell;
 /// nullopt when a finite point lies outside their range (see the file comment).
 template <PointCloud C>
 [[nodiscard]] std::optional<std::vector<cloud_point_t<C>>> voxel_pass_serial(
-    const C& cloud, traits::scalar_t<C> leaf_size,
-    const std::array<std::int64_t, traits::dimension_v<C>>& origin) {
+    const C& cloud, traits::scalar_t<C> leaf_size) {
   using Scalar = traits::scalar_t<C>;
-  constexpr int D = traits::dimension_v<C>;
   using Point = cloud_point_t<C>;
-  constexpr std::size_t Dim = D;
-  using Coords = std::array<Scalar, Dim>;  // (std::array: registers, where Eigen's spill)
+  constexpr std::size_t Dim = traits::dimension_v<C>;
+  using Coords = voxel_coords_t<C>;
   const std::size_t n = traits::size(cloud);
-  constexpr std::int64_t half = voxel_key_half;
   const Scalar inv = Scalar(1) / leaf_size;
+  const auto origin = first_voxel_origin(cloud, leaf_size);
   // A point p lies in the cell c = floor(p * inv) (per axis). p * inv rounds monotonically in
   // p, so the cell is an interval of coordinates: [first(c), first(c + 1)) with first(c) the
   // smallest x whose product x * inv is >= c. Each voxel keeps those bounds (a few ulp steps
@@ -186,37 +215,19 @@ template <PointCloud C>
       in &= static_cast<unsigned>(p[d] >= v.lower[d]) & static_cast<unsigned>(p[d] < v.upper[d]);
     return in != 0;
   };
-  const auto load = [&cloud](std::size_t k, Coords& p) {
-    const auto& q = traits::point(cloud, k);
-    for (std::size_t d = 0; d < Dim; ++d)
-      p[d] = q[static_cast<Eigen::Index>(d)];
-  };
-  // floor(p * inv) - origin must lie in [1 - half, half - 2]; NaN and infinite coordinates fail
-  // the test as well.
-  constexpr Scalar limit = Scalar(std::int64_t(1) << 62);
   std::uint32_t current = none, before = none;
-  Coords p;
   for (std::size_t i = 0; i < n;) {
-    load(i, p);
+    const Coords p = voxel_coords(cloud, i);
     std::uint32_t slot = before;
     if (slot == none || !contains(voxels[slot], p)) {
-      std::uint64_t key = 0;
-      bool inside = true;
-      Coords cell;
-      for (std::size_t d = 0; d < Dim; ++d) {
-        const Scalar t = p[d] * inv;
-        const bool representable = t > -limit && t < limit;
-        const std::int64_t c = floor_to_int(representable ? t : Scalar(0));
-        const std::int64_t r = c - origin[d];
-        inside = inside && representable && r >= 1 - half && r <= half - 2;
-        cell[d] = static_cast<Scalar>(c);
-        key = (key << 21) | static_cast<std::uint64_t>(inside ? r + half : 0);
-      }
-      if (!inside) {
-        if (voxel_point_finite(traits::point(cloud, i), D)) return std::nullopt;
+      const auto cell = voxel_cell(p, inv);
+      const auto found = cell ? voxel_key(*cell, origin) : std::nullopt;
+      if (!found) {  // not finite (skipped), or beyond the keys (the exact filter's work)
+        if (voxel_point_finite(p)) return std::nullopt;
         ++i;
         continue;
       }
+      const std::uint64_t key = *found;
       CacheEntry& entry = cache[(key * 0x9E3779B97F4A7C15ull) >> (64 - cache_bits)];
       if (entry.slot == none || entry.key != key) {
         const auto [it, fresh] =
@@ -224,8 +235,9 @@ template <PointCloud C>
         if (fresh) {
           Voxel v{};
           for (std::size_t d = 0; d < Dim; ++d) {
-            v.lower[d] = first(cell[d]);
-            v.upper[d] = first(cell[d] + 1);
+            const auto c = static_cast<Scalar>((*cell)[d]);
+            v.lower[d] = first(c);
+            v.upper[d] = first(c + 1);
           }
           voxels.push_back(v);
           keys.emplace_back(key, it->second);
@@ -242,8 +254,7 @@ template <PointCloud C>
       sum[d] += p[d];
     std::size_t j = i + 1;
     for (; j < n; ++j) {
-      Coords q;
-      load(j, q);
+      const Coords q = voxel_coords(cloud, j);
       unsigned in = 1;
       for (std::size_t d = 0; d < Dim; ++d)
         in &= static_cast<unsigned>(q[d] >= lower[d]) & static_cast<unsigned>(q[d] < upper[d]);
@@ -274,8 +285,7 @@ template <PointCloud C>
 template <PointCloud C>
 [[nodiscard]] std::vector<cloud_point_t<C>> voxel_downsample_serial(const C& cloud,
                                                                     traits::scalar_t<C> leaf_size) {
-  if (auto out = voxel_pass_serial(cloud, leaf_size, first_voxel_origin(cloud, leaf_size)))
-    return std::move(*out);
+  if (auto out = voxel_pass_serial(cloud, leaf_size)) return std::move(*out);
   return voxel_downsample_exact(cloud, leaf_size);
 }
 
@@ -290,38 +300,24 @@ template <PointCloud C>
   constexpr int D = traits::dimension_v<C>;
   using Point = cloud_point_t<C>;
   const std::size_t n = traits::size(cloud);
-  constexpr std::int64_t half = voxel_key_half;
   constexpr std::uint64_t outside = std::numeric_limits<std::uint64_t>::max();
   const Scalar inv = Scalar(1) / leaf_size;
-  // A finite point outside the key range of the first finite point's cell: the exact filter
-  // takes over, as in the serial filter (see the file comment).
+  // The cell key of every point from the first finite point's cell, as the serial filter
+  // computes it (outside: not finite, skipped). A finite point beyond the keys' range sends the
+  // cloud to the exact filter, as in the serial filter (see the file comment).
   constexpr std::uint64_t beyond = outside - 1;
-  constexpr Scalar limit = Scalar(std::int64_t(1) << 62);
-  // The cell key of every point from `origin`, as the serial filter computes it (outside:
-  // skipped).
+  const auto origin = first_voxel_origin(cloud, leaf_size);
   std::vector<std::uint64_t> keys(n);
   constexpr std::size_t block = 4096;
-  const auto key_all = [&](const std::array<std::int64_t, D>& origin) {
-    for_each_block(
-        n, block, num_threads, [&](std::size_t, std::size_t begin, std::size_t end, int) {
-          for (std::size_t i = begin; i < end; ++i) {
-            const auto& p = traits::point(cloud, i);
-            std::uint64_t key = 0;
-            bool inside = true;
-            for (int d = 0; d < D; ++d) {
-              const Scalar t = static_cast<Scalar>(p[d]) * inv;
-              const bool representable = t > -limit && t < limit;
-              const std::int64_t r =
-                  floor_to_int(representable ? t : Scalar(0)) - origin[static_cast<std::size_t>(d)];
-              inside = inside && representable && r >= 1 - half && r <= half - 2;
-              key = (key << 21) | static_cast<std::uint64_t>(inside ? r + half : 0);
-            }
-            keys[i] = inside ? key : voxel_point_finite(p, D) ? beyond : outside;
-          }
-        });
-    return std::find(keys.begin(), keys.end(), beyond) == keys.end();
-  };
-  if (!key_all(first_voxel_origin(cloud, leaf_size)))
+  for_each_block(n, block, num_threads, [&](std::size_t, std::size_t begin, std::size_t end, int) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto p = voxel_coords(cloud, i);
+      const auto cell = voxel_cell(p, inv);
+      const auto key = cell ? voxel_key(*cell, origin) : std::nullopt;
+      keys[i] = key ? *key : voxel_point_finite(p) ? beyond : outside;
+    }
+  });
+  if (std::find(keys.begin(), keys.end(), beyond) != keys.end())
     return voxel_downsample_exact(cloud, leaf_size);
   // Buckets by key hash, points in input order inside each (a stable counting sort).
   const std::size_t buckets = 16 * static_cast<std::size_t>(num_threads);
