@@ -1,5 +1,6 @@
 // The SLAM front end in a corridor whose ends a short-range scanner cannot see: LaserSlam
-// (example 03's defaults) drives down a 2 m wide, 83 m long simulated corridor, scanning
+// (example 03's defaults) drives down a 2 m wide, 83 m long simulated corridor
+// (sim::long_corridor), scanning
 // forwards (180° at 1°) to a limited range, with odometry that over-reads distance by 1 % (or
 // by what --odometry-scale says) and turns 0.001 rad per step. Along the corridor's axis only a few
 // boxes (or nothing) constrain the scans, so the odometry is what should carry the pose there (the
@@ -27,7 +28,7 @@
 #include "rangenav/core/types.hpp"
 #include "rangenav/mapping/loop_closing_mapper.hpp"
 #include "rangenav/sim/sensors.hpp"
-#include "rangenav/sim/world.hpp"
+#include "rangenav/sim/worlds.hpp"
 
 int main(int argc, char** argv) try {
   using rangenav::Point2d;
@@ -61,13 +62,7 @@ int main(int argc, char** argv) try {
     if (arg == "--odometry-scale") odometry_scale = value;
   }
 
-  rangenav::sim::World world;
-  world.add_polygon(std::vector<Point2d>{{-3, -1}, {80, -1}, {80, 1}, {-3, 1}});
-  if (boxes) {
-    const double xs[] = {2.3, 7.9, 15.2, 21.7, 30.4, 38.8, 47.1, 55.6, 63.0};
-    for (int i = 0; i < 9; ++i)
-      world.add_box({{xs[i], i % 2 ? 0.85 : -0.85}, {0.3, 0.3}, 0.0, 0.0, 1.0});
-  }
+  const rangenav::sim::World world = rangenav::sim::long_corridor(boxes).world;
   rangenav::sim::LaserScannerParams params;
   params.geometry = rangenav::ScanGeometry<double>::from_fov(
       rangenav::deg_to_rad(180.0), rangenav::deg_to_rad(1.0), 0.05, range);

@@ -460,7 +460,7 @@ TEST_CASE("The laser front end keeps the odometry where a short-range scan match
 
 namespace {
 // LaserSlam with the front end `front_end` driving 50 scans down a 2 m wide, 83 m long
-// simulated corridor (tools/corridor_drift's, with its nine boxes or bare walls), scanning
+// simulated corridor (sim::long_corridor, with its nine boxes or bare walls), scanning
 // forwards (180° at 1°) to `range`, in steps of `step` along the axis; the odometry reads
 // `odometry_scale` times each step and turns 0.001 rad. Returns the worst position error
 // against the truth and the odometry's error along the axis at the end.
@@ -468,13 +468,7 @@ std::pair<double, double> drive_corridor(bool boxes, double step, double range,
                                          double odometry_scale, unsigned seed,
                                          const rangenav::IncrementalMapperParams<double>&
                                              front_end = rangenav::laser_slam_params<double>()) {
-  rangenav::sim::World world;
-  world.add_polygon(std::vector<Point2d>{{-3, -1}, {80, -1}, {80, 1}, {-3, 1}});
-  if (boxes) {
-    const double xs[] = {2.3, 7.9, 15.2, 21.7, 30.4, 38.8, 47.1, 55.6, 63.0};
-    for (int i = 0; i < 9; ++i)
-      world.add_box({{xs[i], i % 2 ? 0.85 : -0.85}, {0.3, 0.3}, 0.0, 0.0, 1.0});
-  }
+  const rangenav::sim::World world = rangenav::sim::long_corridor(boxes).world;
   rangenav::sim::LaserScannerParams scanner_params;
   scanner_params.geometry = rangenav::ScanGeometry<double>::from_fov(
       rangenav::deg_to_rad(180.0), rangenav::deg_to_rad(1.0), 0.05, range);

@@ -162,3 +162,25 @@ TEST_CASE("kitchen: rays hit the true planes", "[sim][worlds]") {
   // The floor beside the table.
   CHECK(s.world.cast_ray({4.0, 0.5, 1.5}, {0, 0, -1}, 5).kind == SurfaceKind::floor);
 }
+
+TEST_CASE("long_corridor: walls 1 m either side, boxes against alternate walls", "[sim][worlds]") {
+  const Scene s = long_corridor();
+  CHECK(s.objects.size() == 9);
+  // From the start the walls are 1 m away, and the corridor runs to its end wall at x = 80.
+  const RayHit left = s.world.cast_ray_2d({0, 0}, {0, 1}, 0.3, 10);
+  REQUIRE(left.hit());
+  CHECK(left.range == Approx(1.0));
+  // Along y = 0.85 the first box in the way is box_1 (x = 7.9, north wall): face at 7.75.
+  const RayHit along = s.world.cast_ray_2d({0, 0.85}, {1, 0}, 0.3, 100);
+  REQUIRE(along.hit());
+  CHECK(s.object_of({along.kind, along.index})->name == "box_1");
+  CHECK(along.range == Approx(7.75));
+  CHECK(s.object("box_0").max.y() == Approx(-0.7));
+  // Bare, the same beam reaches the end wall.
+  const Scene bare = long_corridor(false);
+  CHECK(bare.objects.empty());
+  const RayHit end = bare.world.cast_ray_2d({0, 0.85}, {1, 0}, 0.3, 100);
+  REQUIRE(end.hit());
+  CHECK(end.range == Approx(80.0));
+  CHECK(bare.tour.back().x() == Approx(75.0));
+}

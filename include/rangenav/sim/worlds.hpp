@@ -17,6 +17,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
+#include <iterator>
 #include <numbers>
 #include <span>
 #include <string>
@@ -434,6 +435,31 @@ inline constexpr std::size_t office_corridor_door_count = 8;
   s.planes.push_back({"counter_top", {0, 0, 1}, -0.94, rect_z(0, 0.5, 0.65, 3.5, 0.94)});
   s.planes.push_back({"table_top", {0, 0, 1}, -0.75, rect_z(2.0, 1.6, 3.2, 2.4, 0.75)});
   s.start = {4.2, 2.0, std::numbers::pi};
+  return s;
+}
+
+/// A straight corridor 2 m wide and 83 m long (x in [-3, 80], y in [-1, 1], walls 2.5 m), where
+/// scans fix the lateral position and the heading but hardly the position along the axis: the
+/// case in which a SLAM front end must let the odometry carry that direction. With `boxes`, nine
+/// 0.3 m boxes 1 m high stand unevenly spaced against alternate walls (objects box_0..box_8,
+/// centred at x = 2.3, 7.9, 15.2, 21.7, 30.4, 38.8, 47.1, 55.6, 63.0 and y = -0.85, +0.85, ...);
+/// bare, only the far end wall at x = 80 ends the corridor. start = (0, 0, 0); the tour runs
+/// along the axis to (75, 0).
+[[nodiscard]] inline Scene long_corridor(bool boxes = true) {
+  using namespace detail_worlds;
+  Scene s;
+  s.world.add_polygon(std::vector<Point2d>{{-3, -1}, {80, -1}, {80, 1}, {-3, 1}});
+  if (boxes) {
+    const double xs[] = {2.3, 7.9, 15.2, 21.7, 30.4, 38.8, 47.1, 55.6, 63.0};
+    for (std::size_t i = 0; i < std::size(xs); ++i) {
+      SceneObject box = make_object("box_" + std::to_string(i), "box");
+      add_box(s, box, {{xs[i], i % 2 ? 0.85 : -0.85}, {0.3, 0.3}, 0.0, 0.0, 1.0});
+      s.objects.push_back(std::move(box));
+    }
+  }
+  s.world.build_index();
+  s.start = {0, 0, 0};
+  s.tour = {{75, 0}};
   return s;
 }
 
