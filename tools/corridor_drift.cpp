@@ -1,12 +1,11 @@
 // The SLAM front end in a corridor whose ends a short-range scanner cannot see: LaserSlam
 // (example 03's defaults) drives down a 2 m wide, 83 m long simulated corridor
-// (sim::long_corridor), scanning
-// forwards (180° at 1°) to a limited range, with odometry that over-reads distance by 1 % (or
-// by what --odometry-scale says) and turns 0.001 rad per step. Along the corridor's axis only a few
-// boxes (or nothing) constrain the scans, so the odometry is what should carry the pose there (the
-// walls fix the lateral position and the heading). Prints, per noise seed, the worst position error
-// against the simulator's truth over 50 scans, and the odometry's own error along the axis (1 % of
-// the distance by default).
+// (sim::long_corridor), scanning forwards (180° at 1°) to a limited range, with odometry that
+// over-reads distance by 1 % (or by what --odometry-scale says) and turns 0.001 rad per step. Along
+// the corridor's axis only a few boxes (or nothing) constrain the scans, so the odometry is what
+// should carry the pose there (the walls fix the lateral position and the heading). Prints, per
+// noise seed, the worst position error against the simulator's truth over 50 scans, and the
+// odometry's own error along the axis (1 % of the distance by default).
 //
 //   corridor_drift [--range R] [--step S] [--bare] [--seeds N] [--odometry-scale F]
 //
