@@ -62,6 +62,15 @@ template <PointCloud C>
   return p;
 }
 
+/// A voxel's centroid from the sum of its points' coordinates and their count.
+template <class Point, std::floating_point Scalar, std::size_t D>
+[[nodiscard]] Point voxel_centroid(const std::array<Scalar, D>& sum, std::size_t count) {
+  Point p;
+  for (std::size_t d = 0; d < D; ++d)
+    p[static_cast<Eigen::Index>(d)] = sum[d];
+  return p / static_cast<Scalar>(count);
+}
+
 /// Whether every coordinate is finite.
 template <std::floating_point Scalar, std::size_t D>
 [[nodiscard]] bool voxel_point_finite(const std::array<Scalar, D>& p) {
@@ -134,12 +143,8 @@ template <PointCloud C>
   }
   std::vector<Point> out;
   out.reserve(voxels.size());
-  for (const auto& [cell, voxel] : voxels) {
-    Point sum;
-    for (int d = 0; d < D; ++d)
-      sum[d] = voxel.first[static_cast<std::size_t>(d)];
-    out.push_back(sum / static_cast<Scalar>(voxel.second));
-  }
+  for (const auto& [cell, voxel] : voxels)
+    out.push_back(voxel_centroid<Point>(voxel.first, voxel.second));
   return out;
 }
 
@@ -271,12 +276,8 @@ template <PointCloud C>
   std::sort(keys.begin(), keys.end());
   std::vector<Point> out;
   out.reserve(keys.size());
-  for (const auto& [key, slot] : keys) {
-    Point sum;
-    for (std::size_t d = 0; d < Dim; ++d)
-      sum[static_cast<Eigen::Index>(d)] = voxels[slot].sum[d];
-    out.push_back(sum / static_cast<Scalar>(voxels[slot].count));
-  }
+  for (const auto& [key, slot] : keys)
+    out.push_back(voxel_centroid<Point>(voxels[slot].sum, voxels[slot].count));
   return out;
 }
 
@@ -358,12 +359,8 @@ template <PointCloud C>
   });
   std::vector<std::pair<std::uint64_t, Point>> centroids;
   for (const auto& bucket : voxels)
-    for (const Voxel& v : bucket) {
-      Point sum;
-      for (int d = 0; d < D; ++d)
-        sum[d] = v.sum[static_cast<std::size_t>(d)];
-      centroids.emplace_back(v.key, sum / static_cast<Scalar>(v.count));
-    }
+    for (const Voxel& v : bucket)
+      centroids.emplace_back(v.key, voxel_centroid<Point>(v.sum, v.count));
   std::sort(centroids.begin(), centroids.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<Point> out;
