@@ -148,7 +148,7 @@ int main(int argc, char** argv) try {
     std::sort(chi2.begin(), chi2.end());
     const std::size_t n = chi2.size();
     chi2_median = n % 2 ? chi2[n / 2] : (chi2[n / 2 - 1] + chi2[n / 2]) / 2;
-    constexpr double chi2_99 = 11.34;  // 3 degrees of freedom
+    const double chi2_99 = rangenav::LaserSlam<double>::inlier_chi2();
     beyond = double(chi2.end() - std::upper_bound(chi2.begin(), chi2.end(), chi2_99)) / double(n);
   }
   std::printf(

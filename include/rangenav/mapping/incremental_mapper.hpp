@@ -337,9 +337,7 @@ class IncrementalMapper {
       const lie::PoseMatrix<D, Scalar> ad =
           lie::se_adjoint<D, Scalar>(increment.inverse(Eigen::Isometry));
       prediction_information =
-          (ad * *pose_covariance_ * ad.transpose() + odometry_information->inverse())
-              .inverse()
-              .eval();
+          (ad * *pose_covariance_ * ad.transpose() + *odometry_covariance).inverse().eval();
     }
     // Without a registration the pose is the prediction, and so is its covariance.
     if (prediction_information) pose_covariance_ = prediction_information->inverse().eval();

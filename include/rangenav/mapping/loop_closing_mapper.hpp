@@ -239,6 +239,11 @@ class LoopClosingMapper {
     return update;
   }
 
+  /// The χ² quantile (99 %) of an inlier loop edge's squared residual, 3 or 6 degrees of
+  /// freedom: the scale² of the loop edges' Cauchy kernel, and the χ² beyond which a new loop
+  /// edge triggers an optimisation.
+  static constexpr Scalar inlier_chi2() { return D == 2 ? Scalar(11.34) : Scalar(16.81); }
+
   /// Optimises the pose graph once more if a loop edge was added since the last optimisation.
   void finish() {
     if (pending_loops_ > 0 || optimizations_ > 0) optimize(true);
@@ -626,9 +631,6 @@ class LoopClosingMapper {
                         RobustKernel<Scalar>::cauchy(std::sqrt(inlier_chi2())));
     return graph_.edge_chi2(edge);
   }
-
-  // The χ² quantile (99 %) of an inlier edge's squared residual: 3 or 6 degrees of freedom.
-  static constexpr Scalar inlier_chi2() { return D == 2 ? Scalar(11.34) : Scalar(16.81); }
 
   // Online, the graph is re-optimised from its last solution after every disagreeing loop: a
   // relative cost decrease of 1e-6 per step is far below what moves a pose by a millimetre.
