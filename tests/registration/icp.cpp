@@ -938,6 +938,74 @@ TEST_CASE("ICP reports a featureless corridor as degenerate", "[registration]") 
   CHECK(std::abs(result.transform.translation().y() + 0.05 * 1) < 0.02);
 }
 
+TEST_CASE("GICP's degeneracy check takes the normals of its model covariances", "[registration]") {
+  SECTION("a featureless 2D corridor is degenerate along its axis") {
+    const auto model = test::corridor_2d();
+    const KdTree<2, double> tree(model);
+    const auto data = test::transformed<2>(model, make_transform2(-0.3, 0.05, 0.02));
+    const KdTree<2, double> data_tree(data);
+    const auto model_cov = estimate_covariances(tree, 10);
+    const auto data_cov = estimate_covariances(data_tree, 10);
+    BasicIcp<2, double, GicpSolver<2, double>, MaxDistanceRejector<double>> icp;
+    icp.solver.model_covariances = model_cov;
+    icp.solver.data_covariances = data_cov;
+    const auto result = icp.align(tree, data_tree.points());
+    CHECK(result.reason == IcpTermination::degenerate);
+    REQUIRE(result.smallest_eigenvalue);
+    CHECK(*result.smallest_eigenvalue < 1e-3);
+    REQUIRE(result.weakest_direction);
+    CHECK(std::abs((*result.weakest_direction)(0)) > 0.9);  // along the corridor (x)
+  }
+  SECTION("3D: the normals are the covariances', not those of a new neighbour search") {
+    // A well-constrained room whose model covariances all claim a floor (normal z): the check
+    // sees only z, the tilts about x and y, and reports the rest free.
+    std::mt19937 rng(4);
+    const auto room = test::room_3d(rng, 1500);
+    const KdTree<3, double> tree(room);
+    const Eigen::Matrix3d floor =
+        Eigen::Matrix3d::Identity() -
+        0.999 * Eigen::Vector3d::UnitZ() * Eigen::Vector3d::UnitZ().transpose();
+    const std::vector<Eigen::Matrix3d> floors(room.size(), floor);
+    BasicIcp<3, double, GicpSolver<3, double>, MaxDistanceRejector<double>> gicp;
+    gicp.solver.model_covariances = floors;
+    gicp.solver.data_covariances = floors;
+    const auto r = gicp.align(tree, room);
+    CHECK(r.reason == IcpTermination::degenerate);
+    REQUIRE(r.weakest_direction);
+    CHECK(std::abs((*r.weakest_direction)(2)) < 1e-6);  // z translation is constrained
+    Icp<3, double, MaxDistanceRejector<double>> point;  // the room's own normals
+    CHECK(point.align(tree, room).reason != IcpTermination::degenerate);
+  }
+  SECTION("3D: the same eigenvalues as the normals of k model neighbours") {
+    // Noise-free data: both ICPs end at the truth with the same pairs, and the covariances were
+    // estimated from the same 10 neighbours the check would search.
+    std::mt19937 rng(4);
+    const auto room = test::room_3d(rng, 1500);
+    const auto truth = make_transform3(0.1, -0.05, 0.03, 0.02, -0.01, 0.05);
+    const auto data = test::transformed<3>(room, truth.inverse(Eigen::Isometry));
+    const KdTree<3, double> tree(room), data_tree(data);
+    BasicIcp<3, double, GicpSolver<3, double>, MaxDistanceRejector<double>> gicp;
+    const auto model_cov = estimate_covariances(tree, 10);
+    const auto data_cov = estimate_covariances(data_tree, 10);
+    gicp.solver.model_covariances = model_cov;
+    gicp.solver.data_covariances = data_cov;
+    Icp<3, double, MaxDistanceRejector<double>> point;
+    for (auto* p : {&gicp.params, &point.params})
+      p->translation_epsilon = p->rotation_epsilon = 1e-10;
+    const auto a = gicp.align(tree, data_tree.points());
+    const auto b = point.align(tree, data_tree.points());
+    REQUIRE(transform_error<3>(a.transform, truth).first < 1e-6);
+    REQUIRE(transform_error<3>(b.transform, truth).first < 1e-6);
+    REQUIRE(a.matched_count == b.matched_count);
+    REQUIRE(a.smallest_eigenvalue);
+    REQUIRE(b.smallest_eigenvalue);
+    CHECK(a.converged);
+    CHECK(*a.smallest_eigenvalue > 0.01);
+    CHECK(*a.smallest_eigenvalue == Approx(*b.smallest_eigenvalue).epsilon(1e-6));
+    CHECK(*a.condition_number == Approx(*b.condition_number).epsilon(1e-6));
+  }
+}
+
 TEST_CASE("ICP answers bad input clearly, never with NaN", "[registration]") {
   const auto model = test::room_2d();
   const KdTree<2, double> tree(model);

@@ -85,7 +85,8 @@ struct AlignSettings {
   Scalar translation_epsilon = Scalar(1e-4);  ///< m: converged when an iteration moves less ...
   Scalar rotation_epsilon = Scalar(1e-4);     ///< rad: ... and turns less than this
   /// Run ICP's degeneracy check (IcpResult::smallest_eigenvalue; costs a k-NN query per pair for
-  /// the GICP and point-to-point methods). The information matrix is computed either way.
+  /// the point-to-point method; point-to-plane and GICP take the normals they already have).
+  /// The information matrix is computed either way.
   bool check_degeneracy = false;
   /// Threads for every stage (core/parallel.hpp); the result does not depend on it.
   int num_threads = 1;

@@ -98,7 +98,8 @@ struct IcpParams {
   /// eigenvalues are per pair and unit-free (rotations scaled by the data's RMS lever arm): about
   /// 1/D for a well-constrained scene, ~0 along a corridor.
   Scalar degeneracy_threshold = Scalar(0.01);
-  /// Neighbours for the model normals of the degeneracy check; 0 = 5 in 2D, 10 in 3D.
+  /// Neighbours for the model normals of the degeneracy check; 0 = 5 in 2D, 10 in 3D. Unused
+  /// where the solver gives the normals (model normals, or model covariances as in GICP).
   std::size_t normal_neighbors = 0;
   /// Skip the correspondence search of a data point whose nearest model point is provably
   /// among the `reuse_candidates` nearest of its last search (see BasicIcp::match): the pairs,
@@ -199,6 +200,26 @@ struct IcpResult {
   /// The residual variance that scaled it (m^2 per scalar residual).
   std::optional<Scalar> residual_variance;
 };
+
+namespace detail {
+
+/// The normal of a point's covariance: the unit eigenvector of its smallest eigenvalue; zero when
+/// `index` is out of range or the covariance has no direction of least spread (a multiple of the
+/// identity, the shape estimate of a point without enough neighbours).
+template <int D, class Scalar>
+[[nodiscard]] Point<D, Scalar> covariance_normal(
+    std::span<const Eigen::Matrix<Scalar, D, D>> covariances, std::size_t index) {
+  if (index >= covariances.size()) return Point<D, Scalar>::Zero();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, D, D>> eig;
+  eig.computeDirect(covariances[index]);
+  const auto& lambda = eig.eigenvalues();
+  const Scalar tolerance = std::sqrt(std::numeric_limits<Scalar>::epsilon());
+  if (!(lambda(0) < lambda(D - 1) * (Scalar(1) - tolerance))) return Point<D, Scalar>::Zero();
+  const Point<D, Scalar> n = eig.eigenvectors().col(0);
+  return n.allFinite() ? n : Point<D, Scalar>::Zero();
+}
+
+}  // namespace detail
 
 /// ICP with a solver policy and a compile-time list of rejectors (see the file comment).
 template <int D, std::floating_point Scalar, class Solver, class... Rejectors>
@@ -565,7 +586,8 @@ class BasicIcp {
   }
 
   /// The point-to-plane normal equations at the solution, with the model normals of a
-  /// ModelNormalSolver or else the PCA normals of k model neighbours of each paired model point,
+  /// ModelNormalSolver, the normals of a CovarianceSolver's model covariances, or else the PCA
+  /// normals of k model neighbours of each paired model point,
   /// in the centred coordinates of the solvers' step (rotations about the data centroid scaled by
   /// the points' RMS lever arm about each axis: gauss_newton.hpp, PointMoments), divided by the
   /// pair count: eigenvalues in (metres of point motion)^-2 per pair, unit-free.
@@ -578,7 +600,23 @@ class BasicIcp {
     if constexpr (ModelNormalSolver<Solver, D, Scalar>) given = solver.model_normals;
     const std::size_t k =
         params.normal_neighbors != 0 ? params.normal_neighbors : (D == 2 ? 5u : 10u);
-    if (given.empty()) {
+    bool from_covariances = false;
+    if constexpr (CovarianceSolver<Solver, D, Scalar>) {
+      // The model covariances already hold each model point's shape (GICP's are the regularised
+      // PCA covariances of its nearest neighbours): its normal is their direction of least
+      // spread, found without another neighbour search.
+      if (given.empty() && !solver.model_covariances.empty()) {
+        from_covariances = true;
+        normals_.resize(pairs_.size());
+        detail::for_each_block(pairs_.size(), match_block, params.num_threads,
+                               [&](std::size_t, std::size_t begin, std::size_t end, int) {
+                                 for (std::size_t i = begin; i < end; ++i)
+                                   normals_[i] = detail::covariance_normal<D, Scalar>(
+                                       solver.model_covariances, pairs_[i].model_index);
+                               });
+      }
+    }
+    if (given.empty() && !from_covariances) {
       normals_.resize(pairs_.size());
       knn_.resize(static_cast<std::size_t>(params.num_threads));
       detail::for_each_block(
