@@ -210,12 +210,12 @@ template <int D, class Scalar>
 [[nodiscard]] Point<D, Scalar> covariance_normal(
     std::span<const Eigen::Matrix<Scalar, D, D>> covariances, std::size_t index) {
   if (index >= covariances.size()) return Point<D, Scalar>::Zero();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, D, D>> eig;
-  eig.computeDirect(covariances[index]);
-  const auto& lambda = eig.eigenvalues();
+  const PcaFit<D, Scalar> fit =
+      pca_of_covariance<D, Scalar>(Point<D, Scalar>::Zero(), covariances[index], 0);
   const Scalar tolerance = std::sqrt(std::numeric_limits<Scalar>::epsilon());
-  if (!(lambda(0) < lambda(D - 1) * (Scalar(1) - tolerance))) return Point<D, Scalar>::Zero();
-  const Point<D, Scalar> n = eig.eigenvectors().col(0);
+  if (!(fit.eigenvalues(0) < fit.eigenvalues(D - 1) * (Scalar(1) - tolerance)))
+    return Point<D, Scalar>::Zero();
+  const Point<D, Scalar> n = fit.normal();
   return n.allFinite() ? n : Point<D, Scalar>::Zero();
 }
 
