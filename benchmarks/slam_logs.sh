@@ -84,30 +84,17 @@ EOF
       base="$work/$name.$seed.$scale"
       python3 "$tools/noisy_log.py" "$input" "$base.log" "$base.truth" --seed "$seed" \
         --scale "$scale" >/dev/null
-      if [[ -n $max_range ]]; then
-        # FLASER n r_1 .. r_n ...: a return beyond the range becomes no return (0).
-        python3 - "$base.log" "$max_range" <<'EOF'
+      if [[ -n $max_range ]] || ((beam_step > 1)); then
+        # FLASER n r_1 .. r_n ...: every beam_step-th reading (the same field of view), and a
+        # return beyond max_range becomes no return (0).
+        python3 - "$base.log" "${max_range:-inf}" "$beam_step" <<'EOF'
 import sys
-path, limit = sys.argv[1], float(sys.argv[2])
+path, limit, step = sys.argv[1], float(sys.argv[2]), int(sys.argv[3])
 lines = []
 for line in open(path):
     t = line.split()
     n = int(t[1])
-    t[2:2 + n] = [r if 0 < float(r) <= limit else "0" for r in t[2:2 + n]]
-    lines.append(" ".join(t) + "\n")
-open(path, "w").writelines(lines)
-EOF
-      fi
-      if ((beam_step > 1)); then
-        # FLASER n r_1 .. r_n ...: every beam_step-th reading, the same field of view.
-        python3 - "$base.log" "$beam_step" <<'EOF'
-import sys
-path, step = sys.argv[1], int(sys.argv[2])
-lines = []
-for line in open(path):
-    t = line.split()
-    n = int(t[1])
-    kept = t[2:2 + n][::step]
+    kept = [r if 0 < float(r) <= limit else "0" for r in t[2:2 + n][::step]]
     lines.append(" ".join([t[0], str(len(kept))] + kept + t[2 + n:]) + "\n")
 open(path, "w").writelines(lines)
 EOF
