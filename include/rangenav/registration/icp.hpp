@@ -89,9 +89,12 @@ enum class IcpTermination {
 template <std::floating_point Scalar = double>
 struct IcpParams {
   int max_iterations = 50;  ///< iterations at most (each with a correspondence search)
-  Scalar translation_epsilon = Scalar(1e-4);  ///< m: converged when the update moves less ...
-  Scalar rotation_epsilon = Scalar(1e-4);     ///< rad: ... and turns less than this
-  std::size_t min_pairs = 0;                  ///< at least the solver's minimum; 0 = that minimum
+  /// m: converged when the update moves the data frame's origin less than this ... (the
+  /// data's centroid instead when the origin lies farther from the data's bounding box than
+  /// the box's diagonal, as for a cloud in UTM coordinates: see detail::convergence_probe)
+  Scalar translation_epsilon = Scalar(1e-4);
+  Scalar rotation_epsilon = Scalar(1e-4);  ///< rad: ... and turns less than this
+  std::size_t min_pairs = 0;               ///< at least the solver's minimum; 0 = that minimum
   /// Evaluate the normal equations at the solution (costs one k-NN query per pair, once).
   bool check_degeneracy = true;
   /// A smallest normalised eigenvalue below this reports IcpTermination::degenerate. The
@@ -202,6 +205,29 @@ struct IcpResult {
 };
 
 namespace detail {
+
+/// The data-frame point whose move ICP's translation test measures, when it is not the frame's
+/// origin. The origin is a scan's sensor, and measuring there is what small_gicp does and what
+/// translation_epsilon means for data around a sensor. Data farther from the origin than their
+/// own extent (a cloud in UTM or other world coordinates) would turn every tiny rotation of an
+/// update into a long move there (1e-9 rad at 5e6 m: 5 mm), so the test would wait for
+/// rotations far below anything the data resolve: for those the data's centroid, which makes
+/// the number of iterations independent of where the cloud lies. "Farther" = the origin's
+/// distance to the data's bounding box exceeds the box's diagonal.
+template <int D, class Scalar>
+[[nodiscard]] std::optional<Point<D, Scalar>> convergence_probe(
+    std::span<const Point<D, Scalar>> data) {
+  if (data.empty()) return std::nullopt;
+  Point<D, Scalar> lo = data.front(), hi = data.front(), sum = Point<D, Scalar>::Zero();
+  for (const Point<D, Scalar>& p : data) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+    sum += p;
+  }
+  const Point<D, Scalar> nearest = Point<D, Scalar>::Zero().cwiseMax(lo).cwiseMin(hi);
+  if (nearest.norm() <= (hi - lo).norm()) return std::nullopt;
+  return (sum / static_cast<Scalar>(data.size())).eval();
+}
 
 /// The normal of a point's covariance: the unit eigenvector of its smallest eigenvalue; zero when
 /// `index` is out of range or the covariance has no direction of least spread (a multiple of the
@@ -342,6 +368,7 @@ class BasicIcp {
     // rejector settled, x_k in recent[k % size]: the states a limit cycle repeats.
     std::array<transform_type, max_cycle_period + 1> recent;
     int recorded_from = -1;  // the first k recorded; -1 = none
+    const std::optional<point_type> probe = detail::convergence_probe<D, Scalar>(data_);
 
     for (int it = 0; it < params.max_iterations; ++it) {
       ctx.iteration = it;
@@ -372,7 +399,9 @@ class BasicIcp {
       const transform_type previous = transform;
       const transform_type delta = transform.inverse(Eigen::Isometry) * *next;
       transform = *next;
-      const bool small = delta.translation().norm() <= params.translation_epsilon &&
+      // The update moves a data-frame point x by |δ x - x| (x_{k+1} x - x_k x = R_k (δ x - x)).
+      const point_type moved = probe ? (delta * *probe - *probe).eval() : delta.translation();
+      const bool small = moved.norm() <= params.translation_epsilon &&
                          rotation_angle(delta) <= params.rotation_epsilon;
       bool settled = true;
       std::apply([&](const auto&... r) { ((settled = settled && is_settled(r, ctx)), ...); },
