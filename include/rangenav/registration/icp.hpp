@@ -31,6 +31,7 @@
 // have grown. One object per thread.
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -218,14 +219,13 @@ template <int D, class Scalar>
 [[nodiscard]] std::optional<Point<D, Scalar>> convergence_probe(
     std::span<const Point<D, Scalar>> data) {
   if (data.empty()) return std::nullopt;
-  Point<D, Scalar> lo = data.front(), hi = data.front(), sum = Point<D, Scalar>::Zero();
+  Eigen::AlignedBox<Scalar, D> box;
+  Point<D, Scalar> sum = Point<D, Scalar>::Zero();
   for (const Point<D, Scalar>& p : data) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
+    box.extend(p);
     sum += p;
   }
-  const Point<D, Scalar> nearest = Point<D, Scalar>::Zero().cwiseMax(lo).cwiseMin(hi);
-  if (nearest.norm() <= (hi - lo).norm()) return std::nullopt;
+  if (box.exteriorDistance(Point<D, Scalar>::Zero()) <= box.diagonal().norm()) return std::nullopt;
   return (sum / static_cast<Scalar>(data.size())).eval();
 }
 
