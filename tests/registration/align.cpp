@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
-#include <fstream>
 #include <numbers>
 #include <optional>
 #include <random>
@@ -13,7 +12,6 @@
 #include <vector>
 
 #include "rangenav/geometry/voxel_grid.hpp"
-#include "rangenav/io/ply.hpp"
 #include "rangenav/registration/align.hpp"
 #include "rangenav/registration/gauss_newton_solver.hpp"
 #include "rangenav/registration/gicp_solver.hpp"
@@ -23,6 +21,7 @@
 #include "rangenav/registration/point_to_point_solver.hpp"
 #include "rangenav/registration/transform_solver.hpp"
 #include "rangenav/search/kd_tree.hpp"
+#include "registration/kitti_pair.hpp"
 #include "registration/scenes.hpp"
 #include "test_support.hpp"
 
@@ -136,11 +135,6 @@ TEST_CASE("a cloud far from the origin converges as it does at the origin", "[re
   auto source = test::transformed<3>(sample, truth.inverse(Eigen::Isometry));
   test::add_noise<3>(target, 0.005, rng);
   test::add_noise<3>(source, 0.005, rng);
-  const auto shifted = [](std::vector<Eigen::Vector3d> cloud, const Eigen::Vector3d& by) {
-    for (auto& p : cloud)
-      p += by;
-    return cloud;
-  };
   const auto translation = [](const Eigen::Vector3d& by) {
     Transform3d t = Transform3d::Identity();
     t.translation() = by;
@@ -151,8 +145,10 @@ TEST_CASE("a cloud far from the origin converges as it does at the origin", "[re
     INFO(to_string(method));
     const auto s = settings_for<3>(method);
     const auto near =
-        align(shifted(target, -centroid), shifted(source, -centroid), Transform3d::Identity(), s);
-    const auto away = align(shifted(target, far - centroid), shifted(source, far - centroid),
+        align(test::transformed<3>(target, translation(-centroid)),
+              test::transformed<3>(source, translation(-centroid)), Transform3d::Identity(), s);
+    const auto away = align(test::transformed<3>(target, translation(far - centroid)),
+                            test::transformed<3>(source, translation(far - centroid)),
                             Transform3d::Identity(), s);
     REQUIRE(near.converged);
     REQUIRE(away.converged);
@@ -630,17 +626,9 @@ TEST_CASE("align answers bad input clearly", "[registration]") {
 
 TEST_CASE("align on the KITTI pair of small_gicp against its ground truth",
           "[registration][data]") {
-  const auto source_path = test::data_file_or_skip("small_gicp/source.ply");
-  const auto target_path = test::data_file_or_skip("small_gicp/target.ply");
-  const auto truth_path = test::data_file_or_skip("small_gicp/T_target_source.txt");
-  if (source_path.empty() || target_path.empty() || truth_path.empty()) return;
-  Eigen::Matrix4d m;
-  std::ifstream in(truth_path);
-  for (int i = 0; i < 16; ++i)
-    in >> m(i / 4, i % 4);
-  const Transform3d truth(m);
-  const auto source = io::read_ply<double>(source_path);
-  const auto target = io::read_ply<double>(target_path);
+  const auto pair = test::kitti_pair_or_skip();
+  if (!pair) return;
+  const auto& [source, target, truth] = *pair;
   // The issue's protocol: 0.25 m voxels, identity guess, 1.0 m correspondence distance.
   AlignSettings<double> s;
   s.voxel_size = 0.25;

@@ -9,7 +9,6 @@
 
 #include "rangenav/geometry/voxel_grid.hpp"
 #include "rangenav/io/pcd.hpp"
-#include "rangenav/io/ply.hpp"
 #include "rangenav/registration/frustum.hpp"
 #include "rangenav/registration/gicp_solver.hpp"
 #include "rangenav/registration/icp.hpp"
@@ -19,6 +18,7 @@
 #include "rangenav/registration/point_to_point_solver.hpp"
 #include "rangenav/registration/rejectors.hpp"
 #include "rangenav/search/kd_tree.hpp"
+#include "registration/kitti_pair.hpp"
 #include "registration/scenes.hpp"
 #include "test_support.hpp"
 
@@ -1118,18 +1118,12 @@ TEST_CASE("ICP on libpointmatcher's 2D box scans", "[registration][data]") {
 }
 
 TEST_CASE("ICP on the KITTI pair of small_gicp against its ground truth", "[registration][data]") {
-  const auto source_path = test::data_file_or_skip("small_gicp/source.ply");
-  const auto target_path = test::data_file_or_skip("small_gicp/target.ply");
-  const auto truth_path = test::data_file_or_skip("small_gicp/T_target_source.txt");
-  if (source_path.empty() || target_path.empty() || truth_path.empty()) return;
-  Eigen::Matrix4d m;
-  std::ifstream in(truth_path);
-  for (int i = 0; i < 16; ++i)
-    in >> m(i / 4, i % 4);
-  const Transform3d truth(m);
+  const auto pair = test::kitti_pair_or_skip();
+  if (!pair) return;
+  const Transform3d& truth = pair->truth;
   // The protocol: both clouds voxel-downsampled to 0.25 m, identity guess, 1.0 m.
-  const auto source = voxel_downsample(io::read_ply<double>(source_path), 0.25);
-  const KdTree<3, double> target(voxel_downsample(io::read_ply<double>(target_path), 0.25));
+  const auto source = voxel_downsample(pair->source, 0.25);
+  const KdTree<3, double> target(voxel_downsample(pair->target, 0.25));
   Icp<3, double, MaxDistanceRejector<double>> icp;
   icp.params.check_degeneracy = false;
   const auto r = icp.align(target, source);
