@@ -43,28 +43,25 @@ void read_log(benchmark::State& state, const std::filesystem::path& path) {
                           static_cast<std::int64_t>(std::filesystem::file_size(plain_log())));
 }
 
-void BM_carmen_read_mit_gzip(benchmark::State& state) {
+// Both rows need the gzip log and zlib (the plain copy is unpacked from it); otherwise the row
+// is skipped with the reason.
+bool log_available(benchmark::State& state) {
 #ifndef RANGENAV_HAVE_ZLIB
   state.SkipWithError("built without zlib");
-  return;
+  return false;
+#else
+  if (std::filesystem::exists(gz_log)) return true;
+  state.SkipWithError("data file not found: carmen/mit-csail.clf.gz");
+  return false;
 #endif
-  if (!std::filesystem::exists(gz_log)) {
-    state.SkipWithError("data file not found: carmen/mit-csail.clf.gz");
-    return;
-  }
-  read_log(state, gz_log);
+}
+
+void BM_carmen_read_mit_gzip(benchmark::State& state) {
+  if (log_available(state)) read_log(state, gz_log);
 }
 
 void BM_carmen_read_mit_plain(benchmark::State& state) {
-#ifndef RANGENAV_HAVE_ZLIB
-  state.SkipWithError("built without zlib");
-  return;
-#endif
-  if (!std::filesystem::exists(gz_log)) {
-    state.SkipWithError("data file not found: carmen/mit-csail.clf.gz");
-    return;
-  }
-  read_log(state, plain_log());
+  if (log_available(state)) read_log(state, plain_log());
 }
 
 }  // namespace
