@@ -11,6 +11,7 @@
 #include "rangenav/control/indiveri_path_tracker.hpp"
 #include "rangenav/control/indiveri_pose_controller.hpp"
 #include "rangenav/planning/a_star.hpp"
+#include "rangenav/sim/robot.hpp"
 
 using rangenav::Point2d;
 using rangenav::Pose2d;
@@ -31,13 +32,8 @@ std::vector<Point2d> building() {
   return pts;
 }
 
-Pose2d integrate(const Pose2d& p, double v, double omega, double dt) {
-  if (std::abs(omega) < 1e-12)
-    return {p.x + v * dt * std::cos(p.theta), p.y + v * dt * std::sin(p.theta), p.theta};
-  const double r = v / omega, th = p.theta + omega * dt;
-  return {p.x + r * (std::sin(th) - std::sin(p.theta)),
-          p.y - r * (std::cos(th) - std::cos(p.theta)), rangenav::normalize_angle(th)};
-}
+// Exact unicycle motion over dt at constant (v, omega): the simulator's.
+constexpr auto integrate = &rangenav::sim::DifferentialDriveRobot::integrate;
 
 }  // namespace
 
