@@ -136,9 +136,7 @@ TEST_CASE("a cloud far from the origin converges as it does at the origin", "[re
   test::add_noise<3>(target, 0.005, rng);
   test::add_noise<3>(source, 0.005, rng);
   const auto translation = [](const Eigen::Vector3d& by) {
-    Transform3d t = Transform3d::Identity();
-    t.translation() = by;
-    return t;
+    return Transform3d(Eigen::Translation3d(by));
   };
   const Eigen::Vector3d far(5e5, 5e6, 0.0);
   for (const RegistrationMethod method : methods) {
