@@ -22,7 +22,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <numbers>
@@ -34,6 +33,7 @@
 #include "rangenav/io/carmen.hpp"
 #include "rangenav/io/pcd.hpp"
 #include "rangenav/io/ply.hpp"
+#include "rangenav/io/trajectory.hpp"
 #include "rangenav/registration/align.hpp"
 #include "rangenav/registration/icp.hpp"
 #include "rangenav/search/kd_tree.hpp"
@@ -114,11 +114,7 @@ const Pair3& kitti() {
         rangenav::io::read_ply<double>(data_dir / "small_gicp/source.ply"), 0.25);
     p.target = rangenav::voxel_downsample(
         rangenav::io::read_ply<double>(data_dir / "small_gicp/target.ply"), 0.25);
-    Eigen::Matrix4d m;
-    std::ifstream in(data_dir / "small_gicp/T_target_source.txt");
-    for (int i = 0; i < 16; ++i)
-      in >> m(i / 4, i % 4);
-    p.truth = rangenav::Transform3d(m);
+    p.truth = rangenav::io::read_transform_matrix(data_dir / "small_gicp/T_target_source.txt");
     p.max_distance = 1.0;
     return p;
   }();

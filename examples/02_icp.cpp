@@ -12,12 +12,12 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <numbers>
 #include <random>
 #include <vector>
 
 #include "rangenav/io/ply.hpp"
+#include "rangenav/io/trajectory.hpp"
 #include "rangenav/registration/align.hpp"
 #include "rangenav/sim/sensors.hpp"
 #include "rangenav/sim/worlds.hpp"
@@ -160,15 +160,12 @@ int main() {
   const std::filesystem::path data(RANGENAV_EXAMPLE_DATA_DIR);
   double kitti_m = -1;
   if (std::filesystem::exists(data / "small_gicp/source.ply")) {
-    Eigen::Matrix4d m;
-    std::ifstream in(data / "small_gicp/T_target_source.txt");
-    for (int i = 0; i < 16; ++i)
-      in >> m(i / 4, i % 4);
     settings.voxel_size = 0.25;
     const auto r = align(io::read_ply<double>(data / "small_gicp/target.ply"),
                          io::read_ply<double>(data / "small_gicp/source.ply"),
                          Transform3d::Identity(), settings);
-    const auto [em, edeg] = pose_error<3>(r.transform, Transform3d(m));
+    const auto [em, edeg] = pose_error<3>(
+        r.transform, io::read_transform_matrix(data / "small_gicp/T_target_source.txt"));
     kitti_m = em;
     std::printf("6. KITTI pair, GICP: %d iterations, error %.4f m, %.3f deg\n", r.iterations, em,
                 edeg);

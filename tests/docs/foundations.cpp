@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <random>
 #include <string>
@@ -166,6 +167,22 @@ TEST_CASE("io: CARMEN logs and trajectories", "[docs]") {
   REQUIRE(back.size() == poses.size());
   CHECK(back.back().pose.x == Approx(poses.back().x).margin(1e-6));
   CHECK(std::filesystem::file_size(tum_path) > 0);
+}
+
+TEST_CASE("io: KITTI poses and transform matrices", "[docs]") {
+  const docs::ScratchDir dir("docs_io_matrices");
+  std::ofstream(dir / "T_base_lidar.txt") << "0 -1 0 0.20\n1 0 0 0.05\n0 0 1 0.90\n0 0 0 1\n";
+  // [snippet:matrices]
+  const rangenav::Transform3d base_lidar =
+      rangenav::io::read_transform_matrix(dir / "T_base_lidar.txt");  // 3 or 4 rows of 4 numbers
+  const std::vector<rangenav::Transform3d> written{base_lidar, base_lidar.inverse()};
+  rangenav::io::write_kitti(dir / "poses.txt", written);  // r11 r12 r13 tx ... r33 tz per line
+  const std::vector<rangenav::Transform3d> poses = rangenav::io::read_kitti(dir / "poses.txt");
+  // [snippet-end]
+  CHECK(base_lidar.translation().isApprox(Eigen::Vector3d(0.20, 0.05, 0.90)));
+  CHECK((base_lidar * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d(0.20, 1.05, 0.90)));
+  REQUIRE(poses.size() == 2);
+  CHECK((poses[0] * poses[1]).matrix().isIdentity(1e-8));
 }
 
 TEST_CASE("io: PLY, PCD and SVG", "[docs]") {

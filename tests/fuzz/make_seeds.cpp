@@ -162,6 +162,9 @@ void trajectory_seeds(const fs::path& dir) {
   io::write_xytheta(dir / "traj.xyt", t, planar);
   write_gzip_copy(dir / "traj.tum", read_text(dir / "traj.tum"));
   write_text(dir / "comments.tum", "# t x y z qx qy qz qw\n\n1 0 0 0 0 0 0 1\r\n");
+  io::write_kitti(dir / "poses.kitti", poses);
+  write_text(dir / "matrix4.txt", "# T\n0 -1 0 0.2\n1 0 0 0.05\n0 0 1 0.9\n0 0 0 1\n");
+  write_text(dir / "matrix3.txt", "1 0 0 1\n0 1 0 2\n0 0 1 3\n");
 }
 
 void relations_seeds(const fs::path& dir) {

@@ -1,5 +1,6 @@
-// libFuzzer harness: read_tum and read_xytheta (files: plain or gzip) on arbitrary bytes. Every
-// timestamp and pose returned is finite, every rotation orthonormal.
+// libFuzzer harness: read_tum, read_xytheta, read_kitti and read_transform_matrix (files: plain or
+// gzip) on arbitrary bytes. Every timestamp and pose returned is finite, every rotation
+// orthonormal.
 #include <cmath>
 #include <cstdlib>
 
@@ -21,5 +22,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
           !(std::abs(s.pose.theta) <= 3.1415926535897932))
         std::abort();
   });
+  const auto rigid = [](const Transform3d& t) {
+    if (!t.matrix().allFinite() || !(t.linear().transpose() * t.linear()).isIdentity(1e-9) ||
+        !(t.linear().determinant() > 0))
+      std::abort();
+  };
+  fuzz::expect_success_or_error([&] {
+    for (const auto& t : io::read_kitti(path))
+      rigid(t);
+  });
+  fuzz::expect_success_or_error([&] { rigid(io::read_transform_matrix(path)); });
   return 0;
 }

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <limits>
 #include <numbers>
 #include <random>
@@ -221,6 +222,105 @@ TEST_CASE("trajectory writers check their arguments", "[io][trajectory]") {
           write_tum(nowhere, std::vector<double>{1.0}, std::vector<Transform3d>{});
           return 0;
         }) == "rangenav: write_tum: " + nowhere.string() + ": cannot open file for writing");
+}
+
+// ---- KITTI poses and single matrices ---------------------------------------------------------
+
+TEST_CASE("KITTI round trip reproduces the poses to the printed precision", "[io][trajectory]") {
+  TempDir dir;
+  std::mt19937 engine(11);
+  std::vector<Transform3d> written(200);
+  for (auto& t : written)
+    t = random_transform(engine);
+  const auto path = dir.path() / "poses.txt";
+  write_kitti(path, written);
+  // Twelve fields per line, the rows of [R | t].
+  std::istringstream first_line(read_text(path).substr(0, read_text(path).find('\n')));
+  std::vector<double> fields{std::istream_iterator<double>(first_line), {}};
+  REQUIRE(fields.size() == 12);
+  CHECK(std::abs(fields[3] - written[0].translation().x()) <= 0.5e-9 + 1e-13);
+  CHECK(std::abs(fields[4] - written[0].linear()(1, 0)) <= 0.5e-9);
+  const auto read = read_kitti(path);
+  REQUIRE(read.size() == written.size());
+  for (std::size_t i = 0; i < read.size(); ++i) {
+    CHECK((read[i].translation() - written[i].translation()).cwiseAbs().maxCoeff() <=
+          0.5e-9 + 1e-13);
+    CHECK((read[i].linear() - written[i].linear()).cwiseAbs().maxCoeff() <= 1e-8);
+    CHECK(is_rigid(read[i], 1e-12));
+  }
+}
+
+TEST_CASE("read_kitti rejects malformed and non-rigid lines naming file and line",
+          "[io][trajectory]") {
+  TempDir dir;
+  const auto kitti = [&](const std::string& content) {
+    const auto path = dir.write("bad.txt", content);
+    return message_of([&] { return read_kitti(path); });
+  };
+  const std::string prefix = "rangenav: kitti: " + (dir.path() / "bad.txt").string() + ":";
+  const std::string identity = "1 0 0 0 0 1 0 0 0 0 1 0\n";
+  CHECK(kitti(identity + "1 0 0 0 0 1 0 0 0 0 1\n") == prefix + "2: expected 12 fields, found 11");
+  CHECK(kitti("1 0 0 0 0 1 0 0 0 0 1 inf\n") ==
+        prefix + "1: field 12 is not a finite number: 'inf'");
+  // A scaled rotation and a reflection are not rigid.
+  CHECK(kitti("2 0 0 0 0 2 0 0 0 0 2 0\n") ==
+        prefix + "1: rotation is not orthonormal: not a rigid transform");
+  CHECK(kitti("1 0 0 0 0 1 0 0 0 0 -1 0\n") ==
+        prefix + "1: rotation is not orthonormal: not a rigid transform");
+  std::istringstream stream("# poses\n" + identity + "\n" + identity);
+  CHECK(read_kitti(stream, "poses.txt").size() == 2);
+  CHECK(read_kitti(dir.write("empty.txt", "")).empty());
+}
+
+TEST_CASE("read_transform_matrix reads 3x4 and 4x4 rigid matrices", "[io][trajectory]") {
+  const Transform3d truth = [] {
+    std::mt19937 engine(5);
+    return random_transform(engine);
+  }();
+  std::ostringstream text;
+  text.precision(17);
+  text << "# T_target_source\n";
+  for (int r = 0; r < 3; ++r)
+    text << truth.matrix()(r, 0) << ' ' << truth.matrix()(r, 1) << ' ' << truth.matrix()(r, 2)
+         << "  " << truth.matrix()(r, 3) << "\n";
+  for (const std::string& last_row : {std::string(), std::string("0 0 0 1\n")}) {
+    std::istringstream in(text.str() + last_row);
+    const Transform3d read = read_transform_matrix(in);
+    CHECK((read.matrix() - truth.matrix()).cwiseAbs().maxCoeff() <= 1e-12);
+  }
+
+  const auto bad = [](const std::string& content) {
+    std::istringstream in(content);
+    return message_of([&] { return read_transform_matrix(in, "T.txt"); });
+  };
+  const std::string rows = "1 0 0 1\n0 1 0 2\n0 0 1 3\n";
+  CHECK(bad("1 0 0 1\n0 1 0 2\n") ==
+        "rangenav: transform_matrix: T.txt: expected 3 or 4 rows of 4 numbers, found 2 rows");
+  CHECK(bad(rows + "0 0 0 2\n") ==
+        "rangenav: transform_matrix: T.txt:4: last row is not (0, 0, 0, 1): not a rigid transform");
+  CHECK(bad(rows + "0 0 0 1\n0 0 0 1\n") ==
+        "rangenav: transform_matrix: T.txt:5: more than 4 rows: not a 3x4 or 4x4 matrix");
+  CHECK(bad("1 0 0 1\n0 1 0 2 7\n0 0 1 3\n") ==
+        "rangenav: transform_matrix: T.txt:2: expected 4 fields, found 5");
+  CHECK(bad("1 0 0 1\n0 1 0 nan\n0 0 1 3\n") ==
+        "rangenav: transform_matrix: T.txt:2: field 4 is not a finite number: 'nan'");
+  CHECK(bad("1 0 0 1\n1 1 0 2\n0 0 1 3\n") ==
+        "rangenav: transform_matrix: T.txt: rotation is not orthonormal: not a rigid transform");
+}
+
+TEST_CASE("read_transform_matrix reads small_gicp's KITTI ground truth", "[io][trajectory][data]") {
+  const auto path = test::data_file_or_skip("small_gicp/T_target_source.txt");
+  if (path.empty()) return;
+  const Transform3d t = read_transform_matrix(path);
+  // The file's printed values (six significant digits), and a rigid result.
+  CHECK(t.translation().isApprox(Eigen::Vector3d(0.488882, 0.121214, -0.0253342), 1e-6));
+  CHECK(std::abs(t.linear()(0, 1) - 0.0121483) <= 1e-6);
+  CHECK(std::abs(t.linear()(2, 2) - 0.999996) <= 1e-6);
+  CHECK(is_rigid(t, 1e-12));
+  const auto missing = path.parent_path() / "no_such_matrix.txt";
+  CHECK(message_of([&] { return read_transform_matrix(missing); }) ==
+        "rangenav: transform_matrix: " + missing.string() +
+            ": cannot open file: No such file or directory");
 }
 
 TEST_CASE("the MIT CSAIL log's poses survive an xytheta round trip", "[io][trajectory][data]") {

@@ -2,12 +2,12 @@
 // small_gicp's KITTI pair (two lidar scans) and its ground truth, for the registration tests
 // that score a method against it.
 
-#include <fstream>
 #include <optional>
 
 #include "rangenav/core/cloud.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/io/ply.hpp"
+#include "rangenav/io/trajectory.hpp"
 #include "test_support.hpp"
 
 namespace rangenav::test {
@@ -26,12 +26,8 @@ inline std::optional<KittiPair> kitti_pair_or_skip() {
   const auto target_path = data_file_or_skip("small_gicp/target.ply");
   const auto truth_path = data_file_or_skip("small_gicp/T_target_source.txt");
   if (source_path.empty() || target_path.empty() || truth_path.empty()) return std::nullopt;
-  Eigen::Matrix4d m;
-  std::ifstream in(truth_path);
-  for (int i = 0; i < 16; ++i)
-    in >> m(i / 4, i % 4);
   return KittiPair{io::read_ply<double>(source_path), io::read_ply<double>(target_path),
-                   Transform3d(m)};
+                   io::read_transform_matrix(truth_path)};
 }
 
 }  // namespace rangenav::test

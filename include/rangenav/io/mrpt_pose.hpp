@@ -12,12 +12,14 @@
 #include <cstddef>
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 #include <Eigen/Geometry>
 
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
 #include "rangenav/io/detail/fields.hpp"
+#include "rangenav/io/detail/rigid.hpp"
 
 #ifdef RANGENAV_HAVE_ZLIB
 #include <zlib.h>
@@ -96,13 +98,9 @@ inline std::string gunzip(std::string_view format, const std::filesystem::path& 
     }
   if (!m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1), 1e-6))
     detail::throw_io(format, path, 0, "last row is not (0, 0, 0, 1): not a rigid transform");
-  const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
-  if (!(r.transpose() * r).isApprox(Eigen::Matrix3d::Identity(), 1e-3) || r.determinant() < 0)
-    detail::throw_io(format, path, 0, "rotation is not orthonormal: not a rigid transform");
-  Transform3d t = Transform3d::Identity();
-  t.linear() = Eigen::Quaterniond(r).normalized().toRotationMatrix();
-  t.translation() = m.topRightCorner<3, 1>();
-  return t;
+  return detail::rigid_transform_or_fail(m.topRows<3>(), [&](std::string_view message) {
+    detail::throw_io(format, path, 0, message);
+  });
 }
 
 }  // namespace rangenav::io

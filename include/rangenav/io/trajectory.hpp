@@ -3,6 +3,12 @@
 //
 //   TUM      "t tx ty tz qx qy qz qw"  (the TUM RGB-D benchmark format; evo, rpg tools)
 //   xytheta  "t x y theta"             (planar poses, e.g. for the Freiburg SLAM benchmark)
+//   KITTI    "r11 r12 r13 tx r21 r22 r23 ty r31 r32 r33 tz"  (the KITTI odometry benchmark's
+//            poses: the 3x4 matrix [R | t] row by row, no timestamps; evo reads them too)
+//
+// read_transform_matrix reads one rigid transform written as a matrix: 3 or 4 lines of 4
+// numbers ([R | t], then optionally 0 0 0 1), as ground-truth and calibration files give it
+// (e.g. small_gicp's T_target_source.txt).
 //
 // Writers print timestamps with microsecond precision ("%.6f") and the pose fields with 9
 // decimals, locale-independent; a planar pose goes to TUM with z = 0 and a rotation about z.
@@ -25,6 +31,7 @@
 #include "rangenav/core/angles.hpp"
 #include "rangenav/core/error.hpp"
 #include "rangenav/core/types.hpp"
+#include "rangenav/io/detail/rigid.hpp"
 #include "rangenav/io/line_reader.hpp"
 #include "rangenav/io/reader_limits.hpp"
 
@@ -177,6 +184,41 @@ StampedPose2d parse_xytheta(const std::vector<std::string_view>& tokens, const F
   double v[4] = {};
   parse_numbers(tokens, 4, v, fail);
   return {v[0], Pose2d{v[1], v[2], normalize_angle(v[3])}};
+}
+
+template <class Fail>
+Transform3d parse_kitti(const std::vector<std::string_view>& tokens, const Fail& fail) {
+  double v[12] = {};
+  parse_numbers(tokens, 12, v, fail);
+  const Eigen::Matrix<double, 3, 4> m =
+      Eigen::Map<const Eigen::Matrix<double, 3, 4, Eigen::RowMajor>>(v);
+  return rigid_transform_or_fail(m, fail);
+}
+
+// Collects the rows of a matrix file: `rows` counts the data lines seen so far.
+template <class Fail>
+void parse_transform_row(const std::vector<std::string_view>& tokens,
+                         Eigen::Matrix<double, 3, 4>& m, int& rows, const Fail& fail) {
+  if (rows > 3) fail("more than 4 rows: not a 3x4 or 4x4 matrix");
+  double v[4] = {};
+  parse_numbers(tokens, 4, v, fail);
+  const Eigen::RowVector4d row(v[0], v[1], v[2], v[3]);
+  if (rows < 3)
+    m.row(rows) = row;
+  else if (!row.isApprox(Eigen::RowVector4d(0, 0, 0, 1), 1e-6))
+    fail("last row is not (0, 0, 0, 1): not a rigid transform");
+  ++rows;
+}
+
+// The transform of a matrix file's rows once all are read, or io_error naming `name`.
+inline Transform3d finish_transform_matrix(const Eigen::Matrix<double, 3, 4>& m, int rows,
+                                           std::string_view name) {
+  const auto fail = [&](std::string_view message) {
+    throw io_error("rangenav: transform_matrix: " + std::string(name) + ": " +
+                   std::string(message));
+  };
+  if (rows < 3) fail("expected 3 or 4 rows of 4 numbers, found " + std::to_string(rows) + " rows");
+  return rigid_transform_or_fail(m, fail);
 }
 
 }  // namespace detail
@@ -347,6 +389,81 @@ inline std::vector<StampedPose2d> read_xytheta(const std::filesystem::path& path
     trajectory.push_back(detail::parse_xytheta(tokens, fail));
   });
   return trajectory;
+}
+
+// ---- KITTI ----------------------------------------------------------------------------------
+
+/// Writes one "r11 r12 r13 tx r21 r22 r23 ty r31 r32 r33 tz" line per pose (9 decimals). Throws
+/// invalid_argument for a non-finite pose.
+inline void write_kitti(std::ostream& out, std::span<const Transform3d> poses) {
+  std::string line;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    detail::require_finite_entry("write_kitti", i, poses[i].matrix().allFinite());
+    line.clear();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) {
+        if (r + c > 0) line.push_back(' ');
+        detail::append_fixed(line, poses[i].matrix()(r, c), detail::trajectory_pose_decimals);
+      }
+    line.push_back('\n');
+    detail::write_checked(out, line, "write_kitti");
+  }
+}
+
+/// Writes a KITTI pose file; throws io_error when the file cannot be written.
+inline void write_kitti(const std::filesystem::path& path, std::span<const Transform3d> poses) {
+  auto out = detail::open_for_writing(path, "write_kitti");
+  write_kitti(out, poses);
+  detail::close_checked(out, path, "write_kitti");
+}
+
+/// Reads KITTI pose lines from a stream; every rotation must be orthonormal to 1e-3 and is
+/// re-orthonormalised. `name` stands for the source in error messages.
+inline std::vector<Transform3d> read_kitti(std::istream& in, std::string_view name = "<stream>",
+                                           const ReaderLimits& limits = {}) {
+  std::vector<Transform3d> poses;
+  detail::for_each_data_line(in, name, "kitti", limits, [&](const auto& tokens, const auto& fail) {
+    poses.push_back(detail::parse_kitti(tokens, fail));
+  });
+  return poses;
+}
+
+/// Reads a KITTI pose file (plain or gzip).
+inline std::vector<Transform3d> read_kitti(const std::filesystem::path& path,
+                                           const ReaderLimits& limits = {}) {
+  std::vector<Transform3d> poses;
+  detail::for_each_data_line(path, "kitti", limits, [&](const auto& tokens, const auto& fail) {
+    poses.push_back(detail::parse_kitti(tokens, fail));
+  });
+  return poses;
+}
+
+// ---- one transform as a matrix --------------------------------------------------------------
+
+/// Reads one rigid transform written as 3 or 4 lines of 4 numbers ([R | t] row by row, then
+/// optionally 0 0 0 1) from a stream; '#' comments and blank lines are skipped. Throws io_error
+/// naming the source (and the line) for fewer than 3 or more than 4 rows, a row that is not 4
+/// finite numbers, a fourth row other than 0 0 0 1, or a rotation that is not orthonormal to
+/// 1e-3; the rotation is re-orthonormalised.
+inline Transform3d read_transform_matrix(std::istream& in, std::string_view name = "<stream>") {
+  Eigen::Matrix<double, 3, 4> m = Eigen::Matrix<double, 3, 4>::Zero();
+  int rows = 0;
+  detail::for_each_data_line(in, name, "transform_matrix", ReaderLimits{},
+                             [&](const auto& tokens, const auto& fail) {
+                               detail::parse_transform_row(tokens, m, rows, fail);
+                             });
+  return detail::finish_transform_matrix(m, rows, name);
+}
+
+/// Reads one rigid transform from a matrix file (plain or gzip), as the stream overload does.
+inline Transform3d read_transform_matrix(const std::filesystem::path& path) {
+  Eigen::Matrix<double, 3, 4> m = Eigen::Matrix<double, 3, 4>::Zero();
+  int rows = 0;
+  detail::for_each_data_line(path, "transform_matrix", ReaderLimits{},
+                             [&](const auto& tokens, const auto& fail) {
+                               detail::parse_transform_row(tokens, m, rows, fail);
+                             });
+  return detail::finish_transform_matrix(m, rows, path.string());
 }
 
 }  // namespace rangenav::io
