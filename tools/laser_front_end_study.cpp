@@ -8,13 +8,16 @@
 // scored on its optimised trajectory: its single figure moves by a few millimetres with any change
 // that alters one loop decision, so judge a change of it by the spread too.
 //
-//   laser_front_end_study [--log LOG] [--relations FILE] [--gauss-newton-steps N] [--slam]
-//                         [--odometry-jitter M [--runs N]]
+//   laser_front_end_study [--log LOG] [--relations FILE] [--gauss-newton-steps N] [--cauchy D]
+//                         [--slam] [--odometry-jitter M [--runs N]]
 //
 //   --log, --relations       default: carmen/mit-csail.clf.gz and
 //                            slam-benchmark/mit-csail.relations in the shared data folder
 //   --gauss-newton-steps N   the point-to-line solver's steps per ICP iteration (default:
 //                            laser_slam_params()'s solver_gauss_newton_steps, 10)
+//   --cauchy D               a Cauchy kernel of scale D metres on the front end's map
+//                            registration (its icp.solver.kernel; default none). LaserSlam's
+//                            loop-closure ICP keeps the defaults' (none).
 //   --slam                   LaserSlam with loop closure (LoopClosureParams' defaults) over the
 //                            same front-end settings, instead of LaserSlamMapper
 //   --odometry-jitter M      instead of the neighbourhood: laser_slam_params() N times (default
@@ -98,6 +101,7 @@ int main(int argc, char** argv) {
   std::filesystem::path log_path = data / "carmen/mit-csail.clf.gz";
   std::filesystem::path relations_path = data / "slam-benchmark/mit-csail.relations";
   std::optional<int> steps;
+  double cauchy = 0;
   bool slam = false;
   double jitter = 0;
   int runs = 16;
@@ -109,6 +113,8 @@ int main(int argc, char** argv) {
       relations_path = argv[++i];
     } else if (arg == "--gauss-newton-steps" && i + 1 < argc) {
       steps = std::atoi(argv[++i]);
+    } else if (arg == "--cauchy" && i + 1 < argc) {
+      cauchy = std::atof(argv[++i]);
     } else if (arg == "--slam") {
       slam = true;
     } else if (arg == "--odometry-jitter" && i + 1 < argc) {
@@ -118,12 +124,15 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: laser_front_end_study [--log LOG] [--relations FILE] "
-                   "[--gauss-newton-steps N] [--slam] [--odometry-jitter M [--runs N]]\n");
+                   "[--gauss-newton-steps N] [--cauchy D] [--slam] "
+                   "[--odometry-jitter M [--runs N]]\n");
       return 2;
     }
   }
-  if (!(jitter >= 0) || runs < 1) {
-    std::fprintf(stderr, "laser_front_end_study: --odometry-jitter must be >= 0, --runs >= 1\n");
+  if (!(jitter >= 0) || runs < 1 || !(cauchy >= 0)) {
+    std::fprintf(stderr,
+                 "laser_front_end_study: --odometry-jitter and --cauchy must be >= 0, --runs >= "
+                 "1\n");
     return 2;
   }
   if (!std::filesystem::exists(log_path) || !std::filesystem::exists(relations_path)) {
@@ -147,6 +156,9 @@ int main(int argc, char** argv) {
       full.emplace(params, rangenav::LoopClosureParams<double>{});
     else
       mapper.emplace(params);
+    // The map registration's robust kernel (none by default).
+    auto& icp = full ? full->front_end().icp : mapper->icp;
+    if (cauchy > 0) icp.solver.kernel = rangenav::RobustKernel<double>::cauchy(cauchy);
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> offset(-jitter, jitter);
     std::vector<double> stamps;
