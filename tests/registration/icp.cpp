@@ -331,23 +331,20 @@ TEST_CASE("point-to-plane ICP does not slide along a planar front that fills the
   // point map keeps), the data a denser, different sample seen through the true transform. The
   // only features along the wall are the box's sides. Ground truth: the transform of the data.
   const PlanarFrontScene front = planar_front_scene();
-  const FacedCloud& model = front.model;
-  const Transform3d& truth = front.truth;
-  const std::vector<Eigen::Vector3d>& data = front.data;
-  const KdTree<3, double> tree(model.points);
+  const KdTree<3, double> tree(front.model.points);
   BasicIcp<3, double, PointToPlaneSolver<3, double>, DecayingDistanceRejector<double>> icp;
-  icp.solver.model_normals = model.normals;
+  icp.solver.model_normals = front.model.normals;
   icp.params.max_iterations = 50;
   icp.rejector<DecayingDistanceRejector<double>>() = {0.3, 0.05, 0.7};
-  const auto r = icp.align(tree, data, Transform3d::Identity());
+  const auto r = icp.align(tree, front.data, Transform3d::Identity());
   CHECK(r.reason == IcpTermination::converged);
-  const auto [et, er] = transform_error<3>(r.transform, truth);
+  const auto [et, er] = transform_error<3>(r.transform, front.truth);
   CHECK(et < 0.005);
   CHECK(er < 0.002);
   // Without normals the same ICP is point-to-point and lands farther from the truth.
   icp.solver.model_normals = {};
-  const auto p2p = icp.align(tree, data, Transform3d::Identity());
-  CHECK(transform_error<3>(p2p.transform, truth).first > et);
+  const auto p2p = icp.align(tree, front.data, Transform3d::Identity());
+  CHECK(transform_error<3>(p2p.transform, front.truth).first > et);
 }
 
 TEST_CASE("solvers refuse identical, collinear and too few points", "[registration]") {
@@ -838,16 +835,13 @@ TEST_CASE("coarse-to-fine ICP: a data subset first, then all points, to the same
   // truth's as closely as the all-points ICP's (both converge on the same pairs' minimum), with
   // fewer searches.
   const PlanarFrontScene front = planar_front_scene();
-  const FacedCloud& model = front.model;
-  const Transform3d& truth = front.truth;
-  const std::vector<Eigen::Vector3d>& data = front.data;
-  const KdTree<3, double> tree(model.points);
+  const KdTree<3, double> tree(front.model.points);
   using PlaneIcp =
       BasicIcp<3, double, PointToPlaneSolver<3, double>, DecayingDistanceRejector<double>>;
-  const std::size_t n = data.size();
+  const std::size_t n = front.data.size();
   const auto make = [&](std::size_t stride, bool reuse) {
     PlaneIcp icp;
-    icp.solver.model_normals = model.normals;
+    icp.solver.model_normals = front.model.normals;
     icp.params.max_iterations = 50;
     icp.params.coarse_points = stride > 1 ? n / stride : 0;  // every stride-th point
     icp.params.reuse_neighbors = reuse;
@@ -856,15 +850,15 @@ TEST_CASE("coarse-to-fine ICP: a data subset first, then all points, to the same
     return icp;
   };
   auto all = make(1, false);
-  const auto reference = all.align(tree, data, Transform3d::Identity());
+  const auto reference = all.align(tree, front.data, Transform3d::Identity());
   REQUIRE(reference.reason == IcpTermination::converged);
   CHECK(reference.coarse_iterations == 0);
-  const auto [et_ref, er_ref] = transform_error<3>(reference.transform, truth);
+  const auto [et_ref, er_ref] = transform_error<3>(reference.transform, front.truth);
   CHECK(et_ref < 0.005);
   for (const std::size_t stride : {2u, 4u, 8u}) {
     INFO("stride " << stride);
     auto coarse = make(stride, false);
-    const auto r = coarse.align(tree, data, Transform3d::Identity());
+    const auto r = coarse.align(tree, front.data, Transform3d::Identity());
     REQUIRE(r.reason == IcpTermination::converged);
     // The subset ran (and converged: the decaying threshold settles after 4 iterations), the
     // last iterations ran on all points.
@@ -879,7 +873,7 @@ TEST_CASE("coarse-to-fine ICP: a data subset first, then all points, to the same
           static_cast<std::size_t>(r.coarse_iterations) * subset +
               static_cast<std::size_t>(r.iterations - r.coarse_iterations) * n);
     // Same pose as the all-points ICP: both stop at the minimum of the full set's pairs.
-    const auto [et, er] = transform_error<3>(r.transform, truth);
+    const auto [et, er] = transform_error<3>(r.transform, front.truth);
     CHECK(et < 0.005);
     CHECK(er < 0.002);
     const auto [dt, dr] = transform_error<3>(r.transform, reference.transform);
@@ -888,13 +882,13 @@ TEST_CASE("coarse-to-fine ICP: a data subset first, then all points, to the same
     // With reuse: the same pose again, in fewer searches than the all-points ICP with reuse.
     auto coarse_reuse = make(stride, true);
     auto all_reuse = make(1, true);
-    const auto a = coarse_reuse.align(tree, data, Transform3d::Identity());
-    const auto b = all_reuse.align(tree, data, Transform3d::Identity());
+    const auto a = coarse_reuse.align(tree, front.data, Transform3d::Identity());
+    const auto b = all_reuse.align(tree, front.data, Transform3d::Identity());
     CHECK(a.transform.matrix() == r.transform.matrix());
     CHECK(a.neighbor_searches <= b.neighbor_searches);
   }
   SECTION("a subset with fewer pairs than the solver needs falls back to all points") {
-    const std::vector<Eigen::Vector3d> few(data.begin(), data.begin() + 5);
+    const std::vector<Eigen::Vector3d> few(front.data.begin(), front.data.begin() + 5);
     Icp<3> icp;  // point-to-point: 3 pairs at least; every 5th of 5 points is 1
     icp.params.coarse_points = 1;
     const auto r = icp.align(tree, few, Transform3d::Identity());
@@ -905,14 +899,14 @@ TEST_CASE("coarse-to-fine ICP: a data subset first, then all points, to the same
   SECTION("too few data points for a subset of coarse_points: all points throughout") {
     auto coarse = make(1, false);
     coarse.params.coarse_points = n / 2 + 1;
-    const auto r = coarse.align(tree, data, Transform3d::Identity());
+    const auto r = coarse.align(tree, front.data, Transform3d::Identity());
     CHECK(r.coarse_iterations == 0);
     CHECK(r.transform.matrix() == reference.transform.matrix());
   }
   SECTION("the last iteration of the budget runs on all points") {
     auto coarse = make(4, false);
     coarse.params.max_iterations = 3;
-    const auto r = coarse.align(tree, data, Transform3d::Identity());
+    const auto r = coarse.align(tree, front.data, Transform3d::Identity());
     CHECK(r.iterations == 3);
     CHECK(r.coarse_iterations == 2);
     const std::size_t k = n / (n / 4);
