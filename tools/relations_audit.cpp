@@ -6,13 +6,15 @@
 // SLAM estimate can sit in different ones, and a large error then says little about which is
 // wrong. For each of the N relations with the largest translational error, the scan at the
 // second timestamp is registered to the scan at the first twice with the same point-to-line ICP
-// (align(), 2D point_to_plane, pairs within 0.3 m): started from the relation and started from
-// the estimate. Two ends within 1 cm of each other are one minimum (the ICP stops on steps of
-// 0.1 mm), and the verdict is which of the two it lies nearer: the relation (the SLAM result is
-// off there) or the estimate (the scans do not support the relation). Otherwise the scans hold
-// two minima; the fitness (fraction of the scan paired) and RMSE of each are printed.
+// (align(), 2D point_to_plane, pairs within 0.3 m unless --max-distance says otherwise): started
+// from the relation and started from the estimate. Two ends within 1 cm of each other are one
+// minimum (the ICP stops on steps of 0.1 mm), and the verdict is which of the two it lies nearer:
+// the relation (the SLAM result is off there) or the estimate (the scans do not support the
+// relation). Otherwise the scans hold two minima; the fitness (fraction of the scan paired) and
+// RMSE of each are printed.
 //
 //   relations_audit [--log LOG] [--relations FILE] [--trajectory FILE] [--worst N]
+//                   [--max-distance M] [--cauchy D]
 //
 //   --log, --relations  default: carmen/mit-csail.clf.gz and slam-benchmark/mit-csail.relations
 //                       in the shared data folder
@@ -20,6 +22,8 @@
 //                       03_slam_carmen writes trajectory.txt); default: LaserSlam, default
 //                       configuration, run on the log here
 //   --worst N           how many relations to examine (default 20)
+//   --max-distance M    the ICP's pairing distance (m; default 0.3)
+//   --cauchy D          a Cauchy kernel of scale D metres on the ICP's residuals (default none)
 //
 // Prints one line per relation, then one JSON line: the relations examined, their share of the
 // summed error, how many have one minimum at the relation, one at the estimate, or two, and over
@@ -61,6 +65,7 @@ int main(int argc, char** argv) try {
   std::filesystem::path relations_path = data / "slam-benchmark/mit-csail.relations";
   std::filesystem::path trajectory_path;
   std::size_t worst = 20;
+  double max_distance = 0.3, cauchy = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string_view arg = argv[i];
     if (arg == "--log" && i + 1 < argc) {
@@ -71,10 +76,14 @@ int main(int argc, char** argv) try {
       trajectory_path = argv[++i];
     } else if (arg == "--worst" && i + 1 < argc && std::atoi(argv[i + 1]) > 0) {
       worst = static_cast<std::size_t>(std::atoi(argv[++i]));
+    } else if (arg == "--max-distance" && i + 1 < argc && std::atof(argv[i + 1]) > 0) {
+      max_distance = std::atof(argv[++i]);
+    } else if (arg == "--cauchy" && i + 1 < argc && std::atof(argv[i + 1]) > 0) {
+      cauchy = std::atof(argv[++i]);
     } else {
       std::fprintf(stderr,
                    "usage: relations_audit [--log LOG] [--relations FILE] [--trajectory FILE] "
-                   "[--worst N]\n");
+                   "[--worst N] [--max-distance M] [--cauchy D]\n");
       return 2;
     }
   }
@@ -132,7 +141,8 @@ int main(int argc, char** argv) try {
 
   rangenav::AlignSettings<double> icp;
   icp.method = rangenav::RegistrationMethod::point_to_plane;
-  icp.max_correspondence_distance = 0.3;
+  icp.max_correspondence_distance = max_distance;
+  if (cauchy > 0) icp.kernel = rangenav::RobustKernel<double>::cauchy(cauchy);
   const auto points = [&](std::size_t record) {
     std::vector<rangenav::Point2d> out;
     for (const auto& p : log.records[record].scan.points())
