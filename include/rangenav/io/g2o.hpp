@@ -477,9 +477,7 @@ void write_g2o(std::ostream& out, const G2oGraph<D>& graph) {
 /// Writes a g2o file; throws io_error when it cannot be written.
 template <int D>
 void write_g2o(const std::filesystem::path& path, const G2oGraph<D>& graph) {
-  auto out = detail::open_for_writing(path, "write_g2o");
-  write_g2o(out, graph);
-  detail::close_checked(out, path, "write_g2o");
+  detail::write_file(path, "write_g2o", [&](std::ostream& out) { write_g2o(out, graph); });
 }
 
 }  // namespace rangenav::io

@@ -26,6 +26,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "rangenav/core/angles.hpp"
@@ -161,8 +162,8 @@ void parse_numbers(const std::vector<std::string_view>& tokens, std::size_t coun
            std::string(tokens[i]) + "'");
 }
 
-template <class Fail>
-StampedTransform3d parse_tum(const std::vector<std::string_view>& tokens, const Fail& fail) {
+inline constexpr auto parse_tum = [](const std::vector<std::string_view>& tokens,
+                                     const auto& fail) -> StampedTransform3d {
   double v[8] = {};
   parse_numbers(tokens, 8, v, fail);
   Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // Eigen's constructor order is (w, x, y, z)
@@ -177,23 +178,23 @@ StampedTransform3d parse_tum(const std::vector<std::string_view>& tokens, const 
   stamped.pose.linear() = q.toRotationMatrix();
   stamped.pose.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
   return stamped;
-}
+};
 
-template <class Fail>
-StampedPose2d parse_xytheta(const std::vector<std::string_view>& tokens, const Fail& fail) {
+inline constexpr auto parse_xytheta = [](const std::vector<std::string_view>& tokens,
+                                         const auto& fail) -> StampedPose2d {
   double v[4] = {};
   parse_numbers(tokens, 4, v, fail);
   return {v[0], Pose2d{v[1], v[2], normalize_angle(v[3])}};
-}
+};
 
-template <class Fail>
-Transform3d parse_kitti(const std::vector<std::string_view>& tokens, const Fail& fail) {
+inline constexpr auto parse_kitti = [](const std::vector<std::string_view>& tokens,
+                                       const auto& fail) -> Transform3d {
   double v[12] = {};
   parse_numbers(tokens, 12, v, fail);
   const Eigen::Matrix<double, 3, 4> m =
       Eigen::Map<const Eigen::Matrix<double, 3, 4, Eigen::RowMajor>>(v);
   return rigid_transform_or_fail(m, fail);
-}
+};
 
 // Collects the rows of a matrix file: `rows` counts the data lines seen so far.
 template <class Fail>
@@ -219,6 +220,51 @@ inline Transform3d finish_transform_matrix(const Eigen::Matrix<double, 3, 4>& m,
   };
   if (rows < 3) fail("expected 3 or 4 rows of 4 numbers, found " + std::to_string(rows) + " rows");
   return rigid_transform_or_fail(m, fail);
+}
+
+// Every record of a stream (`source` = the stream and its name) or a file (`source` = the path),
+// one parse(tokens, fail) per data line: the body of every trajectory reader.
+template <class T, class Parse, class... Source>
+std::vector<T> read_records(std::string_view where, const ReaderLimits& limits, const Parse& parse,
+                            Source&&... source) {
+  std::vector<T> records;
+  for_each_data_line(
+      std::forward<Source>(source)..., where, limits,
+      [&](const auto& tokens, const auto& fail) { records.push_back(parse(tokens, fail)); });
+  return records;
+}
+
+// The transform of a matrix stream (`source` = the stream and its name) or file (the path).
+template <class... Source>
+Transform3d read_matrix_rows(std::string_view name, Source&&... source) {
+  Eigen::Matrix<double, 3, 4> m = Eigen::Matrix<double, 3, 4>::Zero();
+  int rows = 0;
+  for_each_data_line(
+      std::forward<Source>(source)..., "transform_matrix", ReaderLimits{},
+      [&](const auto& tokens, const auto& fail) { parse_transform_row(tokens, m, rows, fail); });
+  return finish_transform_matrix(m, rows, name);
+}
+
+// Opens `path`, calls write(stream) and closes it, raising io_error when either fails: the body
+// of every file writer.
+template <class Write>
+void write_file(const std::filesystem::path& path, std::string_view where, const Write& write) {
+  auto out = open_for_writing(path, where);
+  write(out);
+  close_checked(out, path, where);
+}
+
+// The timestamps and poses of a stamped trajectory, as the span writers take them.
+template <class Stamped>
+auto split_stamped(std::span<const Stamped> trajectory) {
+  std::pair<std::vector<double>, std::vector<decltype(Stamped::pose)>> split;
+  split.first.reserve(trajectory.size());
+  split.second.reserve(trajectory.size());
+  for (const auto& s : trajectory) {
+    split.first.push_back(s.timestamp);
+    split.second.push_back(s.pose);
+  }
+  return split;
 }
 
 }  // namespace detail
@@ -259,61 +305,42 @@ inline void write_tum(std::ostream& out, std::span<const double> timestamps,
 
 /// Writes stamped transforms as TUM lines.
 inline void write_tum(std::ostream& out, std::span<const StampedTransform3d> trajectory) {
-  std::vector<double> timestamps;
-  std::vector<Transform3d> poses;
-  timestamps.reserve(trajectory.size());
-  poses.reserve(trajectory.size());
-  for (const auto& s : trajectory) {
-    timestamps.push_back(s.timestamp);
-    poses.push_back(s.pose);
-  }
+  const auto [timestamps, poses] = detail::split_stamped(trajectory);
   write_tum(out, timestamps, poses);
 }
 
 /// Writes a TUM file; throws io_error when the file cannot be written.
 inline void write_tum(const std::filesystem::path& path, std::span<const double> timestamps,
                       std::span<const Transform3d> poses) {
-  auto out = detail::open_for_writing(path, "write_tum");
-  write_tum(out, timestamps, poses);
-  detail::close_checked(out, path, "write_tum");
+  detail::write_file(path, "write_tum",
+                     [&](std::ostream& out) { write_tum(out, timestamps, poses); });
 }
 
 /// Writes planar poses as a TUM file (z = 0, rotation about z); throws io_error when the file
 /// cannot be written.
 inline void write_tum(const std::filesystem::path& path, std::span<const double> timestamps,
                       std::span<const Pose2d> poses) {
-  auto out = detail::open_for_writing(path, "write_tum");
-  write_tum(out, timestamps, poses);
-  detail::close_checked(out, path, "write_tum");
+  detail::write_file(path, "write_tum",
+                     [&](std::ostream& out) { write_tum(out, timestamps, poses); });
 }
 
 /// Writes a stamped trajectory as a TUM file; throws io_error when the file cannot be written.
 inline void write_tum(const std::filesystem::path& path,
                       std::span<const StampedTransform3d> trajectory) {
-  auto out = detail::open_for_writing(path, "write_tum");
-  write_tum(out, trajectory);
-  detail::close_checked(out, path, "write_tum");
+  detail::write_file(path, "write_tum", [&](std::ostream& out) { write_tum(out, trajectory); });
 }
 
 /// Reads a TUM trajectory from a stream; `name` stands for the source in error messages.
 inline std::vector<StampedTransform3d> read_tum(std::istream& in,
                                                 std::string_view name = "<stream>",
                                                 const ReaderLimits& limits = {}) {
-  std::vector<StampedTransform3d> trajectory;
-  detail::for_each_data_line(in, name, "tum", limits, [&](const auto& tokens, const auto& fail) {
-    trajectory.push_back(detail::parse_tum(tokens, fail));
-  });
-  return trajectory;
+  return detail::read_records<StampedTransform3d>("tum", limits, detail::parse_tum, in, name);
 }
 
 /// Reads a TUM trajectory file (plain or gzip).
 inline std::vector<StampedTransform3d> read_tum(const std::filesystem::path& path,
                                                 const ReaderLimits& limits = {}) {
-  std::vector<StampedTransform3d> trajectory;
-  detail::for_each_data_line(path, "tum", limits, [&](const auto& tokens, const auto& fail) {
-    trajectory.push_back(detail::parse_tum(tokens, fail));
-  });
-  return trajectory;
+  return detail::read_records<StampedTransform3d>("tum", limits, detail::parse_tum, path);
 }
 
 // ---- x y theta ------------------------------------------------------------------------------
@@ -342,53 +369,35 @@ inline void write_xytheta(std::ostream& out, std::span<const double> timestamps,
 
 /// Writes a stamped planar trajectory as "t x y theta" lines.
 inline void write_xytheta(std::ostream& out, std::span<const StampedPose2d> trajectory) {
-  std::vector<double> timestamps;
-  std::vector<Pose2d> poses;
-  timestamps.reserve(trajectory.size());
-  poses.reserve(trajectory.size());
-  for (const auto& s : trajectory) {
-    timestamps.push_back(s.timestamp);
-    poses.push_back(s.pose);
-  }
+  const auto [timestamps, poses] = detail::split_stamped(trajectory);
   write_xytheta(out, timestamps, poses);
 }
 
 /// Writes "t x y theta" lines to a file; throws io_error when the file cannot be written.
 inline void write_xytheta(const std::filesystem::path& path, std::span<const double> timestamps,
                           std::span<const Pose2d> poses) {
-  auto out = detail::open_for_writing(path, "write_xytheta");
-  write_xytheta(out, timestamps, poses);
-  detail::close_checked(out, path, "write_xytheta");
+  detail::write_file(path, "write_xytheta",
+                     [&](std::ostream& out) { write_xytheta(out, timestamps, poses); });
 }
 
 /// Writes a stamped planar trajectory to a file; throws io_error when the file cannot be
 /// written.
 inline void write_xytheta(const std::filesystem::path& path,
                           std::span<const StampedPose2d> trajectory) {
-  auto out = detail::open_for_writing(path, "write_xytheta");
-  write_xytheta(out, trajectory);
-  detail::close_checked(out, path, "write_xytheta");
+  detail::write_file(path, "write_xytheta",
+                     [&](std::ostream& out) { write_xytheta(out, trajectory); });
 }
 
 /// Reads "t x y theta" lines from a stream; theta is normalised to (-pi, pi].
 inline std::vector<StampedPose2d> read_xytheta(std::istream& in, std::string_view name = "<stream>",
                                                const ReaderLimits& limits = {}) {
-  std::vector<StampedPose2d> trajectory;
-  detail::for_each_data_line(in, name, "xytheta", limits,
-                             [&](const auto& tokens, const auto& fail) {
-                               trajectory.push_back(detail::parse_xytheta(tokens, fail));
-                             });
-  return trajectory;
+  return detail::read_records<StampedPose2d>("xytheta", limits, detail::parse_xytheta, in, name);
 }
 
 /// Reads an x-y-theta trajectory file (plain or gzip).
 inline std::vector<StampedPose2d> read_xytheta(const std::filesystem::path& path,
                                                const ReaderLimits& limits = {}) {
-  std::vector<StampedPose2d> trajectory;
-  detail::for_each_data_line(path, "xytheta", limits, [&](const auto& tokens, const auto& fail) {
-    trajectory.push_back(detail::parse_xytheta(tokens, fail));
-  });
-  return trajectory;
+  return detail::read_records<StampedPose2d>("xytheta", limits, detail::parse_xytheta, path);
 }
 
 // ---- KITTI ----------------------------------------------------------------------------------
@@ -412,30 +421,20 @@ inline void write_kitti(std::ostream& out, std::span<const Transform3d> poses) {
 
 /// Writes a KITTI pose file; throws io_error when the file cannot be written.
 inline void write_kitti(const std::filesystem::path& path, std::span<const Transform3d> poses) {
-  auto out = detail::open_for_writing(path, "write_kitti");
-  write_kitti(out, poses);
-  detail::close_checked(out, path, "write_kitti");
+  detail::write_file(path, "write_kitti", [&](std::ostream& out) { write_kitti(out, poses); });
 }
 
 /// Reads KITTI pose lines from a stream; every rotation must be orthonormal to 1e-3 and is
 /// re-orthonormalised. `name` stands for the source in error messages.
 inline std::vector<Transform3d> read_kitti(std::istream& in, std::string_view name = "<stream>",
                                            const ReaderLimits& limits = {}) {
-  std::vector<Transform3d> poses;
-  detail::for_each_data_line(in, name, "kitti", limits, [&](const auto& tokens, const auto& fail) {
-    poses.push_back(detail::parse_kitti(tokens, fail));
-  });
-  return poses;
+  return detail::read_records<Transform3d>("kitti", limits, detail::parse_kitti, in, name);
 }
 
 /// Reads a KITTI pose file (plain or gzip).
 inline std::vector<Transform3d> read_kitti(const std::filesystem::path& path,
                                            const ReaderLimits& limits = {}) {
-  std::vector<Transform3d> poses;
-  detail::for_each_data_line(path, "kitti", limits, [&](const auto& tokens, const auto& fail) {
-    poses.push_back(detail::parse_kitti(tokens, fail));
-  });
-  return poses;
+  return detail::read_records<Transform3d>("kitti", limits, detail::parse_kitti, path);
 }
 
 // ---- one transform as a matrix --------------------------------------------------------------
@@ -446,24 +445,12 @@ inline std::vector<Transform3d> read_kitti(const std::filesystem::path& path,
 /// finite numbers, a fourth row other than 0 0 0 1, or a rotation that is not orthonormal to
 /// 1e-3; the rotation is re-orthonormalised.
 inline Transform3d read_transform_matrix(std::istream& in, std::string_view name = "<stream>") {
-  Eigen::Matrix<double, 3, 4> m = Eigen::Matrix<double, 3, 4>::Zero();
-  int rows = 0;
-  detail::for_each_data_line(in, name, "transform_matrix", ReaderLimits{},
-                             [&](const auto& tokens, const auto& fail) {
-                               detail::parse_transform_row(tokens, m, rows, fail);
-                             });
-  return detail::finish_transform_matrix(m, rows, name);
+  return detail::read_matrix_rows(name, in, name);
 }
 
 /// Reads one rigid transform from a matrix file (plain or gzip), as the stream overload does.
 inline Transform3d read_transform_matrix(const std::filesystem::path& path) {
-  Eigen::Matrix<double, 3, 4> m = Eigen::Matrix<double, 3, 4>::Zero();
-  int rows = 0;
-  detail::for_each_data_line(path, "transform_matrix", ReaderLimits{},
-                             [&](const auto& tokens, const auto& fail) {
-                               detail::parse_transform_row(tokens, m, rows, fail);
-                             });
-  return detail::finish_transform_matrix(m, rows, path.string());
+  return detail::read_matrix_rows(path.string(), path);
 }
 
 }  // namespace rangenav::io

@@ -4,9 +4,6 @@
 // +1 to the precision files print, re-orthonormalised through a unit quaternion so that what the
 // reader returns is rigid to machine precision.
 
-#include <cmath>
-#include <string_view>
-
 #include <Eigen/Geometry>
 
 #include "rangenav/core/types.hpp"
