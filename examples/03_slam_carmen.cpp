@@ -185,7 +185,8 @@ int main(int argc, char** argv) try {
             << slam.loop_closures().size() << " loop closures accepted of " << slam.loop_attempts()
             << " candidates matched (rejected: " << st.low_score << " low score, " << st.ambiguous
             << " ambiguous, " << st.icp_failed << " ICP, " << st.disagreed
-            << " ICP and matcher disagree), " << slam.optimizations() << " optimisations\nwrote "
+            << " ICP and matcher disagree, " << st.too_wide << " submap too wide), "
+            << slam.optimizations() << " optimisations\nwrote "
             << (out_dir / "trajectory.txt").string() << " and " << (out_dir / "map.svg").string()
             << "\n";
 

@@ -228,6 +228,14 @@ TEST_CASE("CorrelativeScanMatcher refuses a model too wide for its memory bound 
   small.max_memory_bytes = 0;
   CHECK_THROWS_AS(rangenav::CorrelativeScanMatcher<double>(model, small),
                   rangenav::invalid_argument);
+  // fits() answers the constructor's question without the exception.
+  using Matcher = rangenav::CorrelativeScanMatcher<double>;
+  CHECK(Matcher::fits(model, {}));
+  CHECK_FALSE(Matcher::fits(stray, {}));
+  small.max_memory_bytes = 1024;
+  CHECK_FALSE(Matcher::fits(model, small));
+  CHECK_FALSE(Matcher::fits(std::vector<Point2d>{}, {}));
+  CHECK_FALSE(Matcher::fits(std::vector<Point2d>(3, Point2d::Constant(std::nan(""))), {}));
 
   // A window of ±1000 km is clipped to the offsets that can reach the grid: the search ends with
   // the best pose there, which scores at least the ±1 m window's best (it covers that window)
@@ -659,6 +667,29 @@ TEST_CASE("LoopClosingMapper keeps finite poses through a stretch of all-invalid
     REQUIRE(t.matrix().allFinite());
   // Through the gap the odometry carried the pose; with the loop closed the error stays small.
   CHECK(trajectory_error(trajectory, run.truth) < 0.3);
+}
+
+TEST_CASE("LoopClosingMapper goes on past a submap too wide for the loop search's grids",
+          "[mapping][slam]") {
+  // Scans 40-59 carry one stray return 10^6 m out (a glitch, or a scanner of that range): the
+  // submaps of their key frames span more than the correlative matcher's 1 GiB of grids allow.
+  // The loop search leaves those submaps out and counts them; it does not throw, and the ring
+  // still closes through the other submaps.
+  const auto run = rangenav::test::ring_run();
+  rangenav::LaserSlam<double> slam;
+  for (std::size_t i = 0; i < run.scans.size(); ++i) {
+    std::vector<Point2d> points = points_of(run.scans[i]);
+    if (i >= 40 && i < 60) points.emplace_back(1e6, 0.0);
+    const auto u = slam.process(points, run.odometry[i].to_isometry());
+    REQUIRE(u.pose.matrix().allFinite());
+  }
+  slam.finish();
+  const auto trajectory = slam.trajectory();
+  for (const auto& t : trajectory)
+    REQUIRE(t.matrix().allFinite());
+  CHECK(slam.loop_statistics().too_wide > 0);
+  CHECK(slam.loop_closures().size() > 0);
+  CHECK(trajectory_error(trajectory, run.truth) < 0.1);
 }
 
 TEST_CASE("LoopClosingMapper closes the ring in 3D with ICP-verified loops", "[mapping][slam]") {

@@ -174,7 +174,10 @@ struct LoopStatistics {
   std::size_t ambiguous = 0;   ///< a distinct pose scored nearly as well (2D)
   std::size_t icp_failed = 0;  ///< the refining ICP did not converge or paired too little
   std::size_t disagreed = 0;   ///< the ICP moved too far from the matcher's pose / the window
-  std::size_t accepted = 0;    ///< loop edges added
+  /// The submap spans more than the matcher's grids may (matcher.max_memory_bytes; 2D): it is
+  /// not searched (a stray point hundreds of metres out, or a scanner of such range).
+  std::size_t too_wide = 0;
+  std::size_t accepted = 0;  ///< loop edges added
 };
 
 /// What the SLAM did with one scan.
@@ -516,8 +519,12 @@ class LoopClosingMapper {
     LoopClosure<D, Scalar> closure;
     if constexpr (D == 2) {
       if (!s.matcher) {
-        s.matcher = std::make_unique<CorrelativeScanMatcher<Scalar>>(
-            std::span<const point_type>(s.map->points()), loops_.matcher);
+        const std::span<const point_type> model(s.map->points());
+        if (!CorrelativeScanMatcher<Scalar>::fits(model, loops_.matcher)) {
+          ++stats_.too_wide;
+          return std::nullopt;
+        }
+        s.matcher = std::make_unique<CorrelativeScanMatcher<Scalar>>(model, loops_.matcher);
         release_matchers();
       }
       // Olson's ambiguity test: no distinct pose may score nearly as well.

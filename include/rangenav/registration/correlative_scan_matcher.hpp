@@ -139,35 +139,23 @@ class CorrelativeScanMatcher {
   explicit CorrelativeScanMatcher(std::span<const point_type> model,
                                   CorrelativeScanMatcherParams<Scalar> params = {})
       : params_((params.validate(), params)) {
-    Scalar lo_x = std::numeric_limits<Scalar>::infinity(), lo_y = lo_x, hi_x = -lo_x, hi_y = -lo_x;
-    for (const auto& p : model)
-      if (p.allFinite()) {
-        lo_x = std::min(lo_x, p.x());
-        lo_y = std::min(lo_y, p.y());
-        hi_x = std::max(hi_x, p.x());
-        hi_y = std::max(hi_y, p.y());
-      }
-    if (!(lo_x <= hi_x))
+    const Extent box = extent(model);
+    if (box.empty())
       detail::throw_invalid("CorrelativeScanMatcher", "argument 'model' has no finite point");
-    const Scalar r = params_.resolution;
-    const Scalar reach_cells = std::ceil(3 * params_.sigma / r);  // 3σ of the kernel
-    pad_ = (1 << (params_.levels - 1)) - 1;
-    // The grids' size, checked in floating point before any integer conversion.
-    const Scalar side_x = std::ceil((hi_x - lo_x) / r) + 2 * reach_cells + 4 + Scalar(pad_);
-    const Scalar side_y = std::ceil((hi_y - lo_y) / r) + 2 * reach_cells + 4 + Scalar(pad_);
-    const Scalar bytes =
-        side_x * side_y * Scalar(params_.levels) * Scalar(sizeof(Cell16));  // inf when huge
+    const Scalar bytes = grid_bytes(box, params_);
     if (!(bytes <= Scalar(params_.max_memory_bytes)))
       detail::throw_invalid(
           "CorrelativeScanMatcher",
-          "argument 'model' spans " + detail::format_value(hi_x - lo_x) + " m x " +
-              detail::format_value(hi_y - lo_y) + " m: its grids would take " +
+          "argument 'model' spans " + detail::format_value(box.hi_x - box.lo_x) + " m x " +
+              detail::format_value(box.hi_y - box.lo_y) + " m: its grids would take " +
               detail::format_value(std::ceil(bytes)) + " bytes, more than max_memory_bytes = " +
               detail::format_value(params_.max_memory_bytes));
-    const int reach = static_cast<int>(reach_cells);
-    origin_ = point_type(lo_x - Scalar(reach + 1) * r, lo_y - Scalar(reach + 1) * r);
-    width_ = static_cast<int>(std::ceil((hi_x - origin_.x()) / r)) + reach + 2;
-    height_ = static_cast<int>(std::ceil((hi_y - origin_.y()) / r)) + reach + 2;
+    const Scalar r = params_.resolution;
+    const int reach = static_cast<int>(reach_cells(params_));
+    pad_ = pad_cells(params_);
+    origin_ = point_type(box.lo_x - Scalar(reach + 1) * r, box.lo_y - Scalar(reach + 1) * r);
+    width_ = static_cast<int>(std::ceil((box.hi_x - origin_.x()) / r)) + reach + 2;
+    height_ = static_cast<int>(std::ceil((box.hi_y - origin_.y()) / r)) + reach + 2;
     stride_ = width_ + pad_;
     const std::size_t cells =
         static_cast<std::size_t>(stride_) * static_cast<std::size_t>(height_ + pad_);
@@ -258,10 +246,53 @@ class CorrelativeScanMatcher {
     return grids_.size() * (grids_.empty() ? 0 : grids_[0].size() * sizeof(Cell16));
   }
 
+  /// Whether a matcher over `model` can be built with valid `params`: the model has a finite
+  /// point and its grids fit params.max_memory_bytes (the constructor's test, without its
+  /// exception). One pass over the model.
+  [[nodiscard]] static bool fits(std::span<const point_type> model,
+                                 const CorrelativeScanMatcherParams<Scalar>& params) {
+    const Extent box = extent(model);
+    return !box.empty() && grid_bytes(box, params) <= Scalar(params.max_memory_bytes);
+  }
+
  private:
   using Cell16 = std::uint16_t;  ///< a likelihood in fixed point, 65535 = 1
   using Sum = std::uint64_t;     ///< a sum of cells (never overflows)
   static constexpr Cell16 cell_max = std::numeric_limits<Cell16>::max();
+
+  /// The bounding box of the finite points of a model (empty without one).
+  struct Extent {
+    Scalar lo_x = std::numeric_limits<Scalar>::infinity(), lo_y = lo_x, hi_x = -lo_x, hi_y = -lo_x;
+    [[nodiscard]] bool empty() const { return !(lo_x <= hi_x); }
+  };
+  static Extent extent(std::span<const point_type> model) {
+    Extent box;
+    for (const auto& p : model)
+      if (p.allFinite()) {
+        box.lo_x = std::min(box.lo_x, p.x());
+        box.lo_y = std::min(box.lo_y, p.y());
+        box.hi_x = std::max(box.hi_x, p.x());
+        box.hi_y = std::max(box.hi_y, p.y());
+      }
+    return box;
+  }
+  /// Cells of the kernel's reach (3σ) around a point.
+  static Scalar reach_cells(const CorrelativeScanMatcherParams<Scalar>& params) {
+    return std::ceil(3 * params.sigma / params.resolution);
+  }
+  /// Padding of the grids for the coarsest level's 2^(levels-1) cells.
+  static int pad_cells(const CorrelativeScanMatcherParams<Scalar>& params) {
+    return (1 << (params.levels - 1)) - 1;
+  }
+  /// The bytes of all levels of the grids over a non-empty extent, in floating point (+inf when
+  /// huge) so that it is checked before any integer conversion.
+  static Scalar grid_bytes(const Extent& box, const CorrelativeScanMatcherParams<Scalar>& params) {
+    const Scalar r = params.resolution;
+    const Scalar margin = 2 * reach_cells(params) + 4 + Scalar(pad_cells(params));
+    const Scalar side_x = std::ceil((box.hi_x - box.lo_x) / r) + margin;
+    const Scalar side_y = std::ceil((box.hi_y - box.lo_y) / r) + margin;
+    return side_x * side_y * Scalar(params.levels) * Scalar(sizeof(Cell16));
+  }
   static Cell16 quantize(Scalar likelihood) {
     return static_cast<Cell16>(
         std::lround(std::clamp(likelihood, Scalar(0), Scalar(1)) * cell_max));
