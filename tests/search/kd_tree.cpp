@@ -210,6 +210,32 @@ TEST_CASE("GridIndex2 matches brute force while growing, with and without overfl
   CHECK(grid.nearest({1e9 - 1, 0})->index == 1);
   CHECK_FALSE(grid.nearest({0.5, 0}, 0.2).has_value());
   CHECK_FALSE(GridIndex2<double>().nearest({0, 0}).has_value());
+
+  // Queries far off the array, unbounded: the same answers as brute force (before, a query
+  // 10^6 m off visited the cells of 4 million rings, about 10^13 of them, and did not return).
+  // Points beyond any int64 cell go to the overflow list.
+  {
+    std::mt19937 rng(5);
+    auto pts = random_points<2, double>(500, rng, 10.0);
+    pts.emplace_back(1e300, 0.0);
+    pts.emplace_back(-3e18, 5.0);
+    GridIndex2<double> far_grid;
+    REQUIRE(far_grid.insert(pts) == pts.size());
+    const BruteForceSearch<2, double> brute(pts);
+    std::vector<Neighbor<double>> a, b;
+    for (const Eigen::Vector2d& q :
+         {Eigen::Vector2d(1e6, 3e5), Eigen::Vector2d(-40.0, 12.0), Eigen::Vector2d(0.0, -2e12),
+          Eigen::Vector2d(-3e18, 0.0), Eigen::Vector2d(1e300, 1e300)}) {
+      INFO("query " << q.transpose());
+      REQUIRE(far_grid.knn(q, 5, a) == brute.knn(q, 5, b));
+      for (std::size_t j = 0; j < a.size(); ++j)
+        CHECK(a[j].index == b[j].index);
+      const auto n1 = far_grid.nearest(q), n2 = brute.nearest(q);
+      REQUIRE(n1.has_value() == n2.has_value());
+      if (n1) CHECK(n1->index == n2->index);
+      CHECK(far_grid.radius(q, 1e4, a) == brute.radius(q, 1e4, b));
+    }
+  }
   CHECK_THROWS_WITH(GridIndex2<double>(GridIndexParams<double>{0.0}),
                     "rangenav: GridIndex: argument 'cell_size' = 0 must be finite and > 0");
 }

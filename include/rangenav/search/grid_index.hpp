@@ -9,8 +9,11 @@
 // docs/benchmarks.md, bench_slam_relations: the same mapper with either index).
 //
 // Points that would grow the array beyond `max_cells` cells (a stray reading kilometres away)
-// go to an overflow list that every query scans linearly. Indices are stable (insertion
-// order), as in GrowingKdTree.
+// go to an overflow list that every query scans linearly. A query from outside the array meets
+// no point before the ring that reaches the array's nearest cell; when the rings up to there
+// hold more cells than the index holds points, the query scans the points instead (a query
+// kilometres off the map would otherwise visit millions of empty cells). Indices are stable
+// (insertion order), as in GrowingKdTree.
 //
 // Memory: 16 B per point (double) + 4 B per point (bucket chain) + 4 B per cell of the
 // bounding box; memory_bytes() reports the exact figure.
@@ -112,6 +115,9 @@ class GridIndex2 : public SearchQueries<GridIndex2<Scalar>, 2, Scalar> {
  private:
   friend class SearchQueries<GridIndex2, 2, Scalar>;
   static constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+  /// Cells farther than this from cell 0 go to the overflow list: their coordinates, and the
+  /// array's extent with its margins, stay well inside int64.
+  static constexpr Scalar max_cell_coord = Scalar(std::int64_t(1) << 60);
 
   [[nodiscard]] std::int64_t cell_coord(Scalar v) const {
     return static_cast<std::int64_t>(std::floor(v * inv_cell_));
@@ -121,6 +127,11 @@ class GridIndex2 : public SearchQueries<GridIndex2<Scalar>, 2, Scalar> {
     const auto index = static_cast<std::uint32_t>(points_.size());
     points_.push_back(p);
     next_.push_back(none);
+    if (!(std::abs(p.x() * inv_cell_) < max_cell_coord &&
+          std::abs(p.y() * inv_cell_) < max_cell_coord)) {
+      overflow_.push_back(index);
+      return;
+    }
     const std::int64_t cx = cell_coord(p.x()), cy = cell_coord(p.y());
     if (!covers(cx, cy) && !grow_to(cx, cy)) {
       overflow_.push_back(index);
@@ -199,6 +210,24 @@ class GridIndex2 : public SearchQueries<GridIndex2<Scalar>, 2, Scalar> {
     if (max_distance_sq < unbounded_sq<Scalar>)
       limit = std::min(limit, std::sqrt(max_distance_sq) * inv_cell_ + 1);
     if (!(limit >= 0)) return;
+    // The query's distance from the array, in cells (0 inside): no ring before it holds a cell
+    // of the array. Beyond the bound nothing is found; rings up to it that hold more cells than
+    // there are points cost more than scanning the points (see the file comment).
+    const Scalar gap =
+        std::max({static_cast<Scalar>(x0_) - qx, qx - static_cast<Scalar>(x0_ + nx_),
+                  static_cast<Scalar>(y0_) - qy, qy - static_cast<Scalar>(y0_ + ny_), Scalar(0)});
+    if (gap > limit) return;
+    if (2 * gap + 1 > std::sqrt(static_cast<Scalar>(points_.size()))) {
+      std::size_t o = 0;  // the overflow list is ascending and was scanned above
+      for (std::size_t i = 0; i < points_.size(); ++i) {
+        if (o < overflow_.size() && overflow_[o] == i) {
+          ++o;
+          continue;
+        }
+        c.addPoint((points_[i] - q).squaredNorm(), static_cast<std::uint32_t>(i));
+      }
+      return;
+    }
     const auto max_ring = static_cast<std::int64_t>(limit);
     const std::int64_t cx = static_cast<std::int64_t>(std::floor(qx));
     const std::int64_t cy = static_cast<std::int64_t>(std::floor(qy));
