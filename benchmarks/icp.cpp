@@ -475,23 +475,23 @@ class RatioReporter : public benchmark::ConsoleReporter {
   std::map<std::string, std::pair<double, double>> times_;  // name -> (real, cpu)
 };
 
+// A library's rows of one pair, every method at 1 and 2 threads.
 void register_3d(const char* library, const char* data, const Pair3& (*get)(),
-                 void (*fn)(benchmark::State&, const Pair3& (*)(), Method), bool threads) {
+                 void (*fn)(benchmark::State&, const Pair3& (*)(), Method)) {
   for (int m = 0; m < 3; ++m) {
     const auto method = static_cast<Method>(m);
     auto* b = benchmark::RegisterBenchmark(
         (std::string("BM_") + library + "_" + method_names[m] + "_" + data).c_str(),
         [fn, get, method](benchmark::State& state) { fn(state, get, method); });
-    b->Unit(benchmark::kMillisecond)->Arg(1);
-    if (threads) b->Arg(2)->UseRealTime();
+    b->Unit(benchmark::kMillisecond)->Arg(1)->Arg(2)->UseRealTime();
     if (get == &kitti) b->MinTime(1.0);
   }
 }
 
-// A library's rows on both pairs, at 1 and 2 threads.
+// A library's rows on both pairs.
 void register_3d(const char* library, void (*fn)(benchmark::State&, const Pair3& (*)(), Method)) {
-  register_3d(library, "kitti", &kitti, fn, true);
-  register_3d(library, "bunny", &bunny, fn, true);
+  register_3d(library, "kitti", &kitti, fn);
+  register_3d(library, "bunny", &bunny, fn);
 }
 
 }  // namespace
