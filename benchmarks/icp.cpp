@@ -28,6 +28,7 @@
 #include <memory>
 #include <numbers>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -149,6 +150,8 @@ constexpr int neighbors = 10;
 
 enum class Method { icp, plane_icp, gicp };
 const char* const method_names[] = {"icp", "plane_icp", "gicp"};
+// The libraries of the 3D rows: rangenav, then its peers.
+const char* const library_names[] = {"rangenav", "small_gicp", "open3d", "pcl"};
 
 void report_3d(benchmark::State& state, const Pair3& pair, const Eigen::Matrix4d& result,
                double iterations) {
@@ -448,7 +451,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
           const auto o = times_.find(ours);
           if (o == times_.end()) continue;
           const bool real = std::string(threads) != "1";
-          for (const char* peer : {"small_gicp", "open3d", "pcl"}) {
+          for (const char* peer : std::span(library_names).subspan(1)) {
             const auto p =
                 times_.find(std::string("BM_") + peer + "_" + method + "_" + data + "/" + threads);
             if (p == times_.end()) continue;
@@ -461,7 +464,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
     std::printf("\n2-thread speed-up of the whole call (real time):\n");
     for (const char* data : {"kitti", "bunny"})
       for (const char* method : method_names)
-        for (const char* library : {"rangenav", "small_gicp", "open3d"}) {
+        for (const char* library : library_names) {
           const std::string name = std::string("BM_") + library + "_" + method + "_" + data;
           const auto one = times_.find(name + "/1");
           const auto two = times_.find(name + "/2");
