@@ -30,6 +30,14 @@
 // those with one minimum the mean distance of that minimum from the relation and the estimate's
 // mean error. With --worst larger than the file, that compares the trajectory with registering
 // each relation's two scans directly: the most local estimate there is.
+//
+// Where the log has odometry, the JSON line also splits the short relations (< 2 s) with one
+// minimum by what the reference did with the log's odometry between the two scans: kept it
+// (the relation's translation within 1 cm of the odometry's: `odometry_kept`) or moved it
+// (`odometry_moved`; on MIT CSAIL by steps of a 5 cm lattice, docs/benchmarks.md). On each it
+// gives the mean distance of the scans' minimum and of the estimate from the relation, and on
+// the moved ones how far along the segment from the relation to the odometry each lies (the
+// mean of its projection, as a fraction of the segment: 0 at the relation, 1 at the odometry).
 
 #include <algorithm>
 #include <cmath>
@@ -153,6 +161,11 @@ int main(int argc, char** argv) try {
   double listed = 0;
   // Over the relations with one minimum: its distance from the relation, the estimate's error.
   double minimum_to_relation = 0, estimate_error = 0;
+  // The short relations with one minimum, by what the reference did with the odometry.
+  struct Split {
+    std::size_t count = 0;
+    double minimum_error = 0, estimate_error = 0, minimum_along = 0, estimate_along = 0;
+  } kept, moved;
   std::printf("%7s %7s %7s | %-26s | %-26s | %s\n", "t1 (s)", "gap (s)", "error",
               "ICP from the relation", "ICP from the estimate", "the scans' minimum");
   for (const Row& row : rows) {
@@ -175,6 +188,24 @@ int main(int argc, char** argv) try {
       (to_r < to_e ? at_relation : at_estimate)++;
       minimum_to_relation += to_r;
       estimate_error += row.error;
+      if (r.second - r.first < 2 && log.odometry[*a] && log.odometry[*b]) {
+        const Eigen::Vector2d odometry = (log.odometry[*a]->to_isometry().inverse(Eigen::Isometry) *
+                                          log.odometry[*b]->to_isometry())
+                                             .translation();
+        const Eigen::Vector2d segment = odometry - relation.translation();
+        const bool kept_it = segment.norm() < 0.01;
+        Split& split = kept_it ? kept : moved;
+        ++split.count;
+        split.minimum_error += to_r;
+        split.estimate_error += distance(estimate, relation);
+        if (!kept_it) {
+          const auto along = [&](const rangenav::Transform2d& t) {
+            return (t.translation() - relation.translation()).dot(segment) / segment.squaredNorm();
+          };
+          split.minimum_along += along(from_estimate.transform);
+          split.estimate_along += along(estimate);
+        }
+      }
       std::snprintf(verdict, sizeof verdict,
                     "one, %.3f m from the relation, %.3f m from the estimate", to_r, to_e);
     } else {
@@ -186,13 +217,19 @@ int main(int argc, char** argv) try {
                 from_relation.rmse, from_estimate.fitness, from_estimate.rmse, verdict);
   }
   const auto one = static_cast<double>(at_relation + at_estimate);
+  const auto mean = [](double sum, std::size_t n) { return sum / std::max<double>(1, double(n)); };
   std::printf(
       "{\"relations\":%zu,\"examined\":%zu,\"share_of_error\":%.3f,\"one_minimum_at_relation\":%zu,"
       "\"one_minimum_at_estimate\":%zu,\"two_minima\":%zu,\"one_minimum_to_relation_m\":%.4f,"
-      "\"one_minimum_estimate_error_m\":%.4f}\n",
+      "\"one_minimum_estimate_error_m\":%.4f,\"odometry_kept\":%zu,\"kept_minimum_m\":%.4f,"
+      "\"kept_estimate_m\":%.4f,\"odometry_moved\":%zu,\"moved_minimum_m\":%.4f,"
+      "\"moved_estimate_m\":%.4f,\"moved_minimum_along\":%.2f,\"moved_estimate_along\":%.2f}\n",
       relations.size(), at_relation + at_estimate + two_minima, total > 0 ? listed / total : 0.0,
       at_relation, at_estimate, two_minima, minimum_to_relation / std::max<double>(1, one),
-      estimate_error / std::max<double>(1, one));
+      estimate_error / std::max<double>(1, one), kept.count, mean(kept.minimum_error, kept.count),
+      mean(kept.estimate_error, kept.count), moved.count, mean(moved.minimum_error, moved.count),
+      mean(moved.estimate_error, moved.count), mean(moved.minimum_along, moved.count),
+      mean(moved.estimate_along, moved.count));
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "relations_audit: %s\n", e.what());
