@@ -197,7 +197,7 @@ int main(int argc, char** argv) try {
         Split& split = kept_it ? kept : moved;
         ++split.count;
         split.minimum_error += to_r;
-        split.estimate_error += distance(estimate, relation);
+        split.estimate_error += row.error;
         if (!kept_it) {
           const auto along = [&](const rangenav::Transform2d& t) {
             return (t.translation() - relation.translation()).dot(segment) / segment.squaredNorm();
@@ -216,8 +216,8 @@ int main(int argc, char** argv) try {
                 r.first - scan_stamps.front(), r.second - r.first, row.error, from_relation.fitness,
                 from_relation.rmse, from_estimate.fitness, from_estimate.rmse, verdict);
   }
-  const auto one = static_cast<double>(at_relation + at_estimate);
   const auto mean = [](double sum, std::size_t n) { return sum / std::max<double>(1, double(n)); };
+  const std::size_t one = at_relation + at_estimate;
   std::printf(
       "{\"relations\":%zu,\"examined\":%zu,\"share_of_error\":%.3f,\"one_minimum_at_relation\":%zu,"
       "\"one_minimum_at_estimate\":%zu,\"two_minima\":%zu,\"one_minimum_to_relation_m\":%.4f,"
@@ -225,8 +225,8 @@ int main(int argc, char** argv) try {
       "\"kept_estimate_m\":%.4f,\"odometry_moved\":%zu,\"moved_minimum_m\":%.4f,"
       "\"moved_estimate_m\":%.4f,\"moved_minimum_along\":%.2f,\"moved_estimate_along\":%.2f}\n",
       relations.size(), at_relation + at_estimate + two_minima, total > 0 ? listed / total : 0.0,
-      at_relation, at_estimate, two_minima, minimum_to_relation / std::max<double>(1, one),
-      estimate_error / std::max<double>(1, one), kept.count, mean(kept.minimum_error, kept.count),
+      at_relation, at_estimate, two_minima, mean(minimum_to_relation, one),
+      mean(estimate_error, one), kept.count, mean(kept.minimum_error, kept.count),
       mean(kept.estimate_error, kept.count), moved.count, mean(moved.minimum_error, moved.count),
       mean(moved.estimate_error, moved.count), mean(moved.minimum_along, moved.count),
       mean(moved.estimate_along, moved.count));
